@@ -1,0 +1,207 @@
+//! Whole-log audit: run the detector over a log and summarise (contract §3).
+
+use serde::Serialize;
+
+use crate::config::Config;
+use crate::detector::{kind, Detector, Output};
+use crate::indicators::GROUP_NAMES;
+use crate::logs::LogData;
+use crate::metrics::{self, Metrics};
+
+/// One flagged interval.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct FaultInterval {
+    /// Boot-clock seconds of the first and last flagged row.
+    pub start: f64,
+    pub end: f64,
+    /// "gps_outage" or "residual".
+    pub kind: &'static str,
+    /// Largest F-indicator inside.
+    pub peak_f: f64,
+    /// Which residual group drove R at the peak, or "none" for an outage.
+    pub driver: &'static str,
+    /// Which indicator was further above its clean level at the peak: "R" or "C".
+    pub indicator: &'static str,
+    pub rows: u64,
+}
+
+/// A pause in which every sensor stopped.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Gap {
+    pub start: f64,
+    pub end: f64,
+}
+
+/// The audit report (JSON via serde).
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Report {
+    pub format: &'static str,
+    pub rows: usize,
+    pub duration_s: f64,
+    pub gps_epochs: u64,
+    pub gps_rate_hz: f64,
+    pub imu_rate_hz: f64,
+    /// Whether any GPS fix was seen; `false` means no residual verdicts were made.
+    pub gps_available: bool,
+    /// Fraction of GPS reports (rows with GPS columns) that carried a fix.
+    pub gps_fix_fraction: f64,
+    /// Share of GPS epochs flagged (residual faults).
+    pub flagged_gps_epoch_fraction: f64,
+    pub faults: Vec<FaultInterval>,
+    pub data_gaps: Vec<Gap>,
+    pub missing: Vec<String>,
+    pub warnings: Vec<String>,
+    pub meta: Vec<(String, String)>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<Metrics>,
+    pub stats: crate::detector::Stats,
+}
+
+/// Per-row outputs in columns.
+#[derive(Clone, Debug, Default)]
+pub struct Columns {
+    pub t: Vec<f64>,
+    pub status: Vec<u8>,
+    pub f: Vec<f64>,
+    pub r: Vec<f64>,
+    pub c: Vec<f64>,
+    pub kind: Vec<u8>,
+}
+
+const MAX_LISTED: usize = 1000;
+
+/// Run the detector over a log. Rows that fail validation are skipped with a
+/// warning (a log is audited, not rejected, for a few bad rows).
+pub fn audit(log: &LogData, cfg: &Config) -> Result<(Report, Columns), String> {
+    let mut det = Detector::new(cfg.clone())?;
+    let n = log.samples.len();
+    let mut cols = Columns {
+        t: Vec::with_capacity(n),
+        status: Vec::with_capacity(n),
+        f: Vec::with_capacity(n),
+        r: Vec::with_capacity(n),
+        c: Vec::with_capacity(n),
+        kind: Vec::with_capacity(n),
+    };
+    let mut warnings = log.warnings.clone();
+    let mut bad_rows = 0u64;
+    let mut faults: Vec<FaultInterval> = vec![];
+    let mut open: Option<FaultInterval> = None;
+    let mut gaps = vec![];
+    let mut last_t: Option<f64> = None;
+    let (mut gps_reports, mut gps_fixes, mut flagged_epochs) = (0u64, 0u64, 0u64);
+    let mut labels = Vec::with_capacity(n);
+    let mut any_label = false;
+    for (i, s) in log.samples.iter().enumerate() {
+        if let Err(e) = det.validate(s, i as u64) {
+            bad_rows += 1;
+            if bad_rows <= 5 {
+                warnings.push(format!("skipped bad row: {e}"));
+            }
+            continue;
+        }
+        if let Some(lt) = last_t {
+            if s.t - lt > cfg.data_gap && gaps.len() < MAX_LISTED {
+                gaps.push(Gap { start: lt, end: s.t });
+            }
+        }
+        last_t = Some(s.t);
+        if s.has_position() || !s.fix.is_nan() {
+            gps_reports += 1;
+            gps_fixes += s.has_fix() as u64;
+        }
+        let o = det.push_valid(s);
+        if o.gps_epoch && o.status == 1 {
+            flagged_epochs += 1;
+        }
+        track(&mut open, &mut faults, &o, &det);
+        cols.t.push(o.t);
+        cols.status.push(o.status);
+        cols.f.push(o.f);
+        cols.r.push(o.r);
+        cols.c.push(o.c);
+        cols.kind.push(o.kind);
+        labels.push(s.label);
+        any_label |= !s.label.is_nan();
+    }
+    if let Some(iv) = open.take() {
+        faults.push(iv);
+    }
+    if bad_rows > 5 {
+        warnings.push(format!("{bad_rows} bad rows skipped in all"));
+    }
+    let st = det.stats();
+    if st.gps_epochs == 0 {
+        warnings.push(if log.missing.iter().any(|m| m == "gps") {
+            "GPS unavailable: the log has no GPS data; no residual-based verdicts were made".into()
+        } else {
+            "GPS unavailable: no valid fix in the whole log; no residual-based verdicts were made".into()
+        });
+    }
+    for g in &gaps {
+        warnings.push(format!("data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)", g.start, g.end));
+    }
+    let duration = match (cols.t.first(), cols.t.last()) {
+        (Some(a), Some(b)) => b - a,
+        _ => 0.0,
+    };
+    let active = (duration - gaps.iter().map(|g| g.end - g.start).sum::<f64>()).max(1e-9);
+    let metrics = any_label.then(|| metrics::compute(&cols.t, &labels, &cols.status));
+    faults.truncate(MAX_LISTED);
+    let report = Report {
+        format: log.format,
+        rows: cols.t.len(),
+        duration_s: duration,
+        gps_epochs: st.gps_epochs,
+        gps_rate_hz: st.gps_epochs as f64 / active,
+        imu_rate_hz: st.imu_rows as f64 / active,
+        gps_available: st.gps_epochs > 0,
+        gps_fix_fraction: if gps_reports > 0 { gps_fixes as f64 / gps_reports as f64 } else { 0.0 },
+        flagged_gps_epoch_fraction: if st.gps_epochs > 0 { flagged_epochs as f64 / st.gps_epochs as f64 } else { 0.0 },
+        faults,
+        data_gaps: gaps,
+        missing: log.missing.clone(),
+        warnings,
+        meta: log.meta.clone(),
+        metrics,
+        stats: st,
+    };
+    Ok((report, cols))
+}
+
+fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Output, det: &Detector) {
+    if o.status == 0 {
+        if let Some(iv) = open.take() {
+            if done.len() < MAX_LISTED {
+                done.push(iv);
+            }
+        }
+        return;
+    }
+    let kind_name = if o.kind == kind::OUTAGE { "gps_outage" } else { "residual" };
+    let ind = det.indicators();
+    let driver = if o.kind == kind::OUTAGE { "none" } else { ind.r_driver().map_or("none", |g| GROUP_NAMES[g]) };
+    // R is ≈1 when clean and C ≈ 0.2: compare relative excess.
+    let indicator = if o.kind == kind::OUTAGE { "none" } else if (o.c - 0.2) / 0.8 > (o.r - 1.0) / 4.0 { "C" } else { "R" };
+    match open {
+        Some(iv) if iv.kind == kind_name => {
+            iv.end = o.t;
+            iv.rows += 1;
+            if o.f > iv.peak_f {
+                iv.peak_f = o.f;
+                iv.driver = driver;
+                iv.indicator = indicator;
+            }
+        }
+        _ => {
+            if let Some(iv) = open.take() {
+                if done.len() < MAX_LISTED {
+                    done.push(iv);
+                }
+            }
+            *open = Some(FaultInterval { start: o.t, end: o.t, kind: kind_name, peak_f: o.f, driver, indicator, rows: 1 });
+        }
+    }
+}

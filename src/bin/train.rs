@@ -1,0 +1,115 @@
+//! Regenerate the embedded default model, or train one from a labelled log.
+//!
+//! `cargo run --release --bin navguard-train` rewrites `src/default_model.json`
+//! from simulated flights (seeds 1000+, never the evaluation seeds).
+//! `cargo run --release --bin navguard-train -- --from FILE.csv [--out model.json]`
+//! trains from your own labelled navlog CSV(s) (`label` column, 0/1).
+
+use navguard::config::Config;
+use navguard::detector::Model;
+use navguard::logs::csv::read_csv;
+use navguard::sim::{self, FaultKind, OutageMode, Scenario, Trajectory};
+use navguard::Sample;
+
+/// The training battery: outages (both modes), every fault kind at low,
+/// middle and high magnitude, and clean flights of every trajectory.
+fn battery() -> Vec<Scenario> {
+    let mut v = vec![];
+    let mut seed = 1000;
+    let mut next = || {
+        seed += 1;
+        seed
+    };
+    for mode in [OutageMode::Degraded, OutageMode::Silent] {
+        v.push(Scenario::paper(mode, next()));
+    }
+    let mags: &[(FaultKind, [f64; 3])] = &[
+        (FaultKind::Step, [5.0, 10.0, 20.0]),
+        (FaultKind::Ramp, [0.1, 0.5, 1.0]),
+        (FaultKind::Noise, [2.0, 5.0, 10.0]),
+        (FaultKind::Frozen, [0.0, 0.0, 0.0]),
+        (FaultKind::ZeroVelocity, [0.0, 0.0, 0.0]),
+        (FaultKind::BaroStuck, [0.0, 0.0, 0.0]),
+        (FaultKind::AccelBias, [0.3, 0.6, 1.0]),
+    ];
+    for (kind, ms) in mags {
+        for (i, m) in ms.iter().enumerate() {
+            let start = [70.0, 130.0, 175.0][i];
+            v.push(Scenario::with_fault(*kind, *m, start, 15.0, next()));
+        }
+    }
+    for tr in [Trajectory::Paper, Trajectory::Aggressive, Trajectory::Survey] {
+        v.push(Scenario::clean(tr, next(), 250.0));
+    }
+    let mut g = Scenario::paper(OutageMode::Degraded, next());
+    g.imu_rate = 0.0;
+    g.name = "gps-only".into();
+    v.push(g);
+    v
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut from = vec![];
+    let mut out = String::from("src/default_model.json");
+    let mut i = 0;
+    while i < args.len() {
+        match args[i].as_str() {
+            "--from" => {
+                i += 1;
+                from.push(args.get(i).cloned().unwrap_or_default());
+            }
+            "--out" => {
+                i += 1;
+                out = args.get(i).cloned().unwrap_or(out);
+            }
+            "-h" | "--help" => {
+                println!("usage: navguard-train [--from LABELLED.csv ...] [--out model.json]");
+                return;
+            }
+            other => {
+                eprintln!("navguard-train: unknown argument {other}");
+                std::process::exit(2);
+            }
+        }
+        i += 1;
+    }
+    let cfg = Config::default();
+    let streams: Vec<Vec<Sample>> = if from.is_empty() {
+        battery()
+            .iter()
+            .map(|sc| {
+                sim::simulate(sc).unwrap_or_else(|e| {
+                    eprintln!("navguard-train: {e}");
+                    std::process::exit(2)
+                })
+            })
+            .collect()
+    } else {
+        from.iter()
+            .map(|f| {
+                let bytes = std::fs::read(f).unwrap_or_else(|e| {
+                    eprintln!("navguard-train: {f}: {e}");
+                    std::process::exit(2)
+                });
+                read_csv(&bytes)
+                    .unwrap_or_else(|e| {
+                        eprintln!("navguard-train: {f}: {e}");
+                        std::process::exit(2)
+                    })
+                    .samples
+            })
+            .collect()
+    };
+    let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
+    let model = Model::train(&refs, &cfg, 42).unwrap_or_else(|e| {
+        eprintln!("navguard-train: {e}");
+        std::process::exit(2)
+    });
+    let json = serde_json::to_string(&model).unwrap_or_default();
+    if let Err(e) = std::fs::write(&out, json + "\n") {
+        eprintln!("navguard-train: cannot write {out}: {e}");
+        std::process::exit(2);
+    }
+    eprintln!("wrote {out}: {}", model.provenance);
+}

@@ -1,0 +1,216 @@
+//! Detector configuration: a loose input form (every field optional, as JS
+//! passes it) validated once into [`Config`]. Errors name the field and value.
+
+use serde::{Deserialize, Serialize};
+
+use crate::anfis::Anfis;
+use crate::filter::FilterNoise;
+use crate::indicators::IndicatorSettings;
+
+/// What users pass (JSON / JS object, camelCase). Unknown fields are rejected.
+#[derive(Clone, Debug, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename_all = "camelCase")]
+pub struct ConfigInput {
+    /// Detection method; only "anfis" for now.
+    pub method: Option<String>,
+    /// Training condition: retrain after this many new fault epochs.
+    pub tc: Option<f64>,
+    /// Length of each database D1, D2 (epochs).
+    pub q: Option<f64>,
+    /// Indicator window (GPS epochs).
+    pub window: Option<f64>,
+    /// F-indicator decision threshold.
+    pub threshold: Option<f64>,
+    /// Online retraining on/off.
+    pub retrain: Option<bool>,
+    /// GPS horizontal position noise, m.
+    pub gps_pos_sigma: Option<f64>,
+    /// GPS vertical position noise, m.
+    pub gps_alt_sigma: Option<f64>,
+    /// GPS velocity noise, m/s.
+    pub gps_vel_sigma: Option<f64>,
+    /// Barometer noise, m.
+    pub baro_sigma: Option<f64>,
+    /// Accelerometer noise for the INS prediction, m/s².
+    pub accel_noise: Option<f64>,
+    /// Acceleration noise of the constant-velocity model (GPS only), m/s².
+    pub cv_accel_noise: Option<f64>,
+    /// Time without a fix that counts as an outage, s (default: auto from the GPS rate).
+    pub outage_timeout: Option<f64>,
+    /// Longest coast on rejected GPS before re-anchoring the filter, s.
+    pub max_coast: Option<f64>,
+    /// A pause with no rows at all longer than this is a logging gap, s.
+    pub data_gap: Option<f64>,
+    /// A trained model (as written by `navguard-train` / `trainFromCsv`).
+    pub model: Option<crate::detector::Model>,
+}
+
+/// Checked configuration.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Config {
+    pub tc: usize,
+    pub q: usize,
+    pub window: usize,
+    pub threshold: f64,
+    pub retrain: bool,
+    pub noise: FilterNoiseCfg,
+    pub outage_timeout: Option<f64>,
+    pub max_coast: f64,
+    pub data_gap: f64,
+    #[serde(skip)]
+    pub model: Option<crate::detector::Model>,
+}
+
+/// Serializable mirror of the filter noise (for reports).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FilterNoiseCfg {
+    pub gps_pos_sigma: f64,
+    pub gps_alt_sigma: f64,
+    pub gps_vel_sigma: f64,
+    pub baro_sigma: f64,
+    pub accel_noise: f64,
+    pub cv_accel_noise: f64,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        // Defaults cannot fail validation; a test checks that.
+        let d = FilterNoise::default();
+        Config {
+            tc: 100,
+            q: 500,
+            window: 10,
+            threshold: 0.5,
+            retrain: true,
+            noise: FilterNoiseCfg {
+                gps_pos_sigma: d.gps_pos_h,
+                gps_alt_sigma: d.gps_pos_v,
+                gps_vel_sigma: d.gps_vel,
+                baro_sigma: d.baro,
+                accel_noise: d.accel,
+                cv_accel_noise: d.cv_accel,
+            },
+            outage_timeout: None,
+            max_coast: 20.0,
+            data_gap: 1.0,
+            model: None,
+        }
+    }
+}
+
+fn num(field: &str, v: Option<f64>, lo: f64, hi: f64, default: f64) -> Result<f64, String> {
+    match v {
+        None => Ok(default),
+        Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(x),
+        Some(x) => Err(format!("config.{field}: must be a number in [{lo}, {hi}], got {x}")),
+    }
+}
+
+fn int(field: &str, v: Option<f64>, lo: usize, hi: usize, default: usize) -> Result<usize, String> {
+    match v {
+        None => Ok(default),
+        Some(x) if x.is_finite() && x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => Ok(x as usize),
+        Some(x) => Err(format!("config.{field}: must be an integer in {lo}..={hi}, got {x}")),
+    }
+}
+
+impl ConfigInput {
+    /// Validate into a [`Config`].
+    pub fn check(&self) -> Result<Config, String> {
+        let d = Config::default();
+        if let Some(m) = &self.method {
+            if m != "anfis" {
+                return Err(format!("config.method: unknown method \"{m}\" (available: \"anfis\")"));
+            }
+        }
+        let n = &d.noise;
+        let outage_timeout = match self.outage_timeout {
+            None => None,
+            Some(x) => Some(num("outageTimeout", Some(x), 0.01, 3600.0, 0.0)?),
+        };
+        if let Some(m) = &self.model {
+            m.check().map_err(|e| format!("config.model: {e}"))?;
+        }
+        Ok(Config {
+            tc: int("tc", self.tc, 1, 1_000_000, d.tc)?,
+            q: int("q", self.q, 10, 100_000, d.q)?,
+            window: int("window", self.window, 2, 1000, d.window)?,
+            threshold: num("threshold", self.threshold, -10.0, 10.0, d.threshold)?,
+            retrain: self.retrain.unwrap_or(d.retrain),
+            noise: FilterNoiseCfg {
+                gps_pos_sigma: num("gpsPosSigma", self.gps_pos_sigma, 1e-3, 1000.0, n.gps_pos_sigma)?,
+                gps_alt_sigma: num("gpsAltSigma", self.gps_alt_sigma, 1e-3, 1000.0, n.gps_alt_sigma)?,
+                gps_vel_sigma: num("gpsVelSigma", self.gps_vel_sigma, 1e-4, 100.0, n.gps_vel_sigma)?,
+                baro_sigma: num("baroSigma", self.baro_sigma, 1e-3, 1000.0, n.baro_sigma)?,
+                accel_noise: num("accelNoise", self.accel_noise, 1e-4, 100.0, n.accel_noise)?,
+                cv_accel_noise: num("cvAccelNoise", self.cv_accel_noise, 1e-3, 1000.0, n.cv_accel_noise)?,
+            },
+            outage_timeout,
+            max_coast: num("maxCoast", self.max_coast, 0.1, 3600.0, d.max_coast)?,
+            data_gap: num("dataGap", self.data_gap, 0.05, 3600.0, d.data_gap)?,
+            model: self.model.clone(),
+        })
+    }
+
+    /// Parse and check a JSON config text (`{}` or empty for defaults).
+    pub fn from_json(text: &str) -> Result<Config, String> {
+        if text.trim().is_empty() {
+            return Ok(Config::default());
+        }
+        let input: ConfigInput = serde_json::from_str(text).map_err(|e| format!("config: {e}"))?;
+        input.check()
+    }
+}
+
+impl Config {
+    pub fn filter_noise(&self) -> FilterNoise {
+        let n = &self.noise;
+        FilterNoise {
+            accel: n.accel_noise,
+            cv_accel: n.cv_accel_noise,
+            gps_pos_h: n.gps_pos_sigma,
+            gps_pos_v: n.gps_alt_sigma,
+            gps_vel: n.gps_vel_sigma,
+            baro: n.baro_sigma,
+            ..FilterNoise::default()
+        }
+    }
+
+    pub fn indicator_settings(&self) -> IndicatorSettings {
+        IndicatorSettings { window: self.window, ..IndicatorSettings::default() }
+    }
+}
+
+/// Used by [`crate::detector::Model::check`].
+pub(crate) fn check_anfis(a: &Anfis) -> Result<(), String> {
+    if a.is_finite() {
+        Ok(())
+    } else {
+        Err("ANFIS parameters must be finite with positive widths".into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_validate() {
+        assert_eq!(ConfigInput::default().check().unwrap(), Config::default());
+        assert_eq!(ConfigInput::from_json("{}").unwrap(), Config::default());
+    }
+
+    #[test]
+    fn errors_name_field_and_value() {
+        let e = ConfigInput::from_json(r#"{"tc": 0}"#).unwrap_err();
+        assert!(e.contains("config.tc") && e.contains("got 0"), "{e}");
+        let e = ConfigInput::from_json(r#"{"window": 2.5}"#).unwrap_err();
+        assert!(e.contains("config.window") && e.contains("2.5"), "{e}");
+        let e = ConfigInput::from_json(r#"{"bogus": 1}"#).unwrap_err();
+        assert!(e.contains("bogus"), "{e}");
+        let e = ConfigInput::from_json(r#"{"method": "magic"}"#).unwrap_err();
+        assert!(e.contains("config.method") && e.contains("magic"), "{e}");
+        let e = ConfigInput::from_json(r#"{"gpsPosSigma": -1}"#).unwrap_err();
+        assert!(e.contains("config.gpsPosSigma") && e.contains("-1"), "{e}");
+    }
+}

@@ -1,0 +1,666 @@
+//! The online KF–ANFIS detector of Sun et al. 2017 §2.4.
+//!
+//! Per row: validate, predict the filter to the row's time, feed IMU and
+//! baro, and at each GPS fix compute residuals, the R/C indicators and the
+//! ANFIS F-indicator; `F ≥ threshold` is a fault. A fault epoch's residual
+//! groups that departed are not fed to the filter (it coasts on the IMU), so a
+//! fault cannot drag the estimate it is judged against. Each epoch's own
+//! verdict files its (R, C) into database D1 (normal) or D2 (fault), ring
+//! buffers of length q (eqs. 15–20); after TC new fault epochs the ANFIS is
+//! retrained on D1 ∪ D2 by hybrid learning. No fix while flying, after a fix
+//! has been seen, is a GPS outage (a fault); rows between fixes carry the last
+//! epoch's verdict. Every allocation happens in `new`.
+
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+
+use crate::anfis::{inputs, Anfis};
+use crate::config::Config;
+use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Kf};
+use crate::frames::Anchor;
+use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
+use crate::sample::Sample;
+
+/// A trained model: ANFIS parameters plus the initial databases D1₀, D2₀.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Model {
+    pub anfis: Anfis,
+    /// Normal samples, ANFIS input space `[ln(1+R), C]`.
+    pub d1: Vec<[f64; 2]>,
+    /// Fault samples.
+    pub d2: Vec<[f64; 2]>,
+    /// How it was made (free text).
+    #[serde(default)]
+    pub provenance: String,
+}
+
+impl Model {
+    /// The model shipped in the crate, made by `cargo run --release --bin navguard-train`.
+    pub fn embedded() -> Result<Model, String> {
+        serde_json::from_str(include_str!("default_model.json")).map_err(|e| format!("embedded model: {e}"))
+    }
+
+    /// Train a model from labelled streams: run the detector with decisions
+    /// forced to the labels (so the filter gates as it would on a correct
+    /// verdict), collect `(R, C)` at labelled GPS epochs, clean, subsample
+    /// `q` per class with a seeded RNG, and fit the ANFIS by hybrid learning.
+    ///
+    /// Cleaning: fault epochs whose indicators never left the clean region
+    /// (`R < 2` and `C < 0.6`, e.g. the first seconds of a slow ramp) are
+    /// dropped from D2: they carry no fault signature and would only teach the
+    /// model to alarm on clean data.
+    pub fn train(streams: &[&[Sample]], cfg: &Config, seed: u64) -> Result<Model, String> {
+        let mut normal = vec![];
+        let mut fault = vec![];
+        let base = Model::untrained();
+        for rows in streams {
+            let mut det = Detector::with_model(cfg.clone(), &base);
+            det.set_oracle(true);
+            for (i, s) in rows.iter().enumerate() {
+                let o = det.push(s).map_err(|e| format!("training stream, {e} (index {i})"))?;
+                if !o.gps_epoch || s.label.is_nan() || o.kind == kind::NO_GPS {
+                    continue;
+                }
+                let x = inputs(o.r, o.c);
+                if s.label >= 0.5 {
+                    if o.r >= 2.0 || o.c >= 0.6 {
+                        fault.push(x);
+                    }
+                } else {
+                    normal.push(x);
+                }
+            }
+        }
+        if normal.len() < 10 || fault.len() < 10 {
+            return Err(format!(
+                "training needs at least 10 labelled normal and 10 fault GPS epochs with a fault signature; got {} and {}",
+                normal.len(),
+                fault.len()
+            ));
+        }
+        let mut rng = crate::sim::Rng::new(seed);
+        let pick = |v: &mut Vec<[f64; 2]>, n: usize, rng: &mut crate::sim::Rng| -> Vec<[f64; 2]> {
+            // Partial Fisher–Yates: a seeded uniform subsample.
+            let n = n.min(v.len());
+            for i in 0..n {
+                let j = i + (rng.next_u64() % (v.len() - i) as u64) as usize;
+                v.swap(i, j);
+            }
+            v[..n].to_vec()
+        };
+        let d1 = pick(&mut normal, cfg.q, &mut rng);
+        let d2 = pick(&mut fault, cfg.q, &mut rng);
+        let mut xs = d1.clone();
+        xs.extend_from_slice(&d2);
+        let ys: Vec<f64> = d1.iter().map(|_| 0.0).chain(d2.iter().map(|_| 1.0)).collect();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for x in &xs {
+            for k in 0..2 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
+        }
+        let mut anfis = Anfis::init_grid(lo, hi);
+        let mse = anfis.train_hybrid(&xs, &ys, 200, 0.05);
+        Ok(Model {
+            anfis,
+            d1,
+            d2,
+            provenance: format!(
+                "navguard-train: {} streams, {} normal / {} fault epochs before subsampling, q={}, window={}, seed={}, training MSE {:.4}",
+                streams.len(),
+                normal.len(),
+                fault.len(),
+                cfg.q,
+                cfg.window,
+                seed,
+                mse
+            ),
+        })
+    }
+
+    /// Grid-initialised ANFIS with a plain R ramp, used only to drive the
+    /// trainer's oracle runs (their decisions come from the labels).
+    pub fn untrained() -> Model {
+        Model { anfis: Anfis::init_grid([0.0, 0.0], [3.0, 1.0]), d1: vec![], d2: vec![], provenance: "untrained".into() }
+    }
+
+    pub fn check(&self) -> Result<(), String> {
+        crate::config::check_anfis(&self.anfis)?;
+        if !self.d1.iter().chain(self.d2.iter()).flatten().all(|v| v.is_finite()) {
+            return Err("database entries must be finite".into());
+        }
+        Ok(())
+    }
+}
+
+/// What kind of verdict a row carries.
+pub mod kind {
+    pub const NORMAL: u8 = 0;
+    /// Residual-based fault (ANFIS).
+    pub const RESIDUAL: u8 = 1;
+    /// GPS outage: no fix while flying.
+    pub const OUTAGE: u8 = 2;
+    /// No verdict possible: no GPS fix seen yet (or since a data gap).
+    pub const NO_GPS: u8 = 3;
+}
+
+/// Per-row output.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Output {
+    pub t: f64,
+    /// 0 normal, 1 fault.
+    pub status: u8,
+    /// F-indicator.
+    pub f: f64,
+    pub r: f64,
+    pub c: f64,
+    /// See [`kind`].
+    pub kind: u8,
+    /// Whether this row was a GPS epoch (a fix was evaluated).
+    pub gps_epoch: bool,
+    /// Residual group that drove R (0 pos, 1 vel, 2 baro, 255 none).
+    pub driver: u8,
+}
+
+/// Bad input: names the row and the field.
+#[derive(Clone, Debug, PartialEq)]
+pub struct InputError {
+    pub row: u64,
+    pub field: &'static str,
+    pub reason: String,
+}
+
+impl core::fmt::Display for InputError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "row {}: field '{}': {}", self.row, self.field, self.reason)
+    }
+}
+
+/// Counters of things worth reporting (no unbounded storage).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct Stats {
+    pub rows: u64,
+    pub gps_epochs: u64,
+    pub imu_rows: u64,
+    pub baro_rows: u64,
+    pub retrains: u64,
+    pub filter_resets: u64,
+    pub data_gaps: u64,
+    pub filter_errors: u64,
+}
+
+/// Fixed-capacity ring buffer (database D1 or D2).
+#[derive(Clone, Debug)]
+struct Ring {
+    buf: Vec<[f64; 2]>,
+    head: usize,
+    len: usize,
+}
+
+impl Ring {
+    fn new(cap: usize, init: &[[f64; 2]]) -> Self {
+        let mut r = Ring { buf: vec![[0.0; 2]; cap.max(1)], head: 0, len: 0 };
+        let skip = init.len().saturating_sub(cap);
+        for x in init.iter().skip(skip) {
+            r.push(*x);
+        }
+        r
+    }
+    fn push(&mut self, x: [f64; 2]) {
+        let cap = self.buf.len();
+        self.buf[self.head] = x;
+        self.head = (self.head + 1) % cap;
+        self.len = (self.len + 1).min(cap);
+    }
+    fn items(&self) -> &[[f64; 2]] {
+        &self.buf[..self.len]
+    }
+}
+
+const IMU_TIMEOUT: f64 = 0.25; // s: older IMU is not used for prediction
+const GATE: f64 = 2.5; // per-group R above which a group is withheld during a fault
+const TRAIN_EPOCHS: usize = 5;
+const TRAIN_LR: f64 = 0.05;
+
+/// The streaming detector.
+#[derive(Clone, Debug)]
+pub struct Detector {
+    cfg: Config,
+    anfis: Anfis,
+    d1: Ring,
+    d2: Ring,
+    new_faults: usize,
+    kf: Option<Kf>,
+    anchor: Option<Anchor>,
+    ind: IndicatorEngine,
+    imu: Option<(f64, ImuInput)>,
+    last_t: Option<f64>,
+    last_fix_t: Option<f64>,
+    fix_seen: bool,
+    gps_dt: f64,
+    prev_pos: Vector3<f64>,
+    prev_vel: Vector3<f64>,
+    prev_baro_h: Option<f64>,
+    coast_start: Option<f64>,
+    group_bad: [bool; GROUPS],
+    last: Output,
+    last_ind: Indicators,
+    stats: Stats,
+    oracle: bool,
+    train_x: Vec<[f64; 2]>,
+    train_y: Vec<f64>,
+}
+
+impl Detector {
+    /// Detector with the config's model, or the embedded default.
+    pub fn new(cfg: Config) -> Result<Self, String> {
+        let model = match &cfg.model {
+            Some(m) => m.clone(),
+            None => Model::embedded()?,
+        };
+        Ok(Self::with_model(cfg, &model))
+    }
+
+    pub fn with_model(cfg: Config, model: &Model) -> Self {
+        let q = cfg.q;
+        Detector {
+            anfis: model.anfis.clone(),
+            d1: Ring::new(q, &model.d1),
+            d2: Ring::new(q, &model.d2),
+            new_faults: 0,
+            kf: None,
+            anchor: None,
+            ind: IndicatorEngine::new(cfg.indicator_settings()),
+            imu: None,
+            last_t: None,
+            last_fix_t: None,
+            fix_seen: false,
+            gps_dt: 0.2,
+            prev_pos: Vector3::zeros(),
+            prev_vel: Vector3::zeros(),
+            prev_baro_h: None,
+            coast_start: None,
+            group_bad: [false; GROUPS],
+            last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
+            last_ind: Indicators::default(),
+            stats: Stats::default(),
+            oracle: false,
+            train_x: Vec::with_capacity(2 * q),
+            train_y: Vec::with_capacity(2 * q),
+            cfg,
+        }
+    }
+
+    /// Teacher forcing for building training data: decisions follow the
+    /// row's `label` instead of the ANFIS (used by the model trainer only).
+    pub fn set_oracle(&mut self, on: bool) {
+        self.oracle = on;
+    }
+
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    pub fn anfis(&self) -> &Anfis {
+        &self.anfis
+    }
+
+    /// The local NED anchor (first valid fix), once known.
+    pub fn anchor(&self) -> Option<Anchor> {
+        self.anchor
+    }
+
+    /// Filter position estimate NED (m), once initialised.
+    pub fn position(&self) -> Option<Vector3<f64>> {
+        self.kf.as_ref().map(|k| k.position())
+    }
+
+    /// Latest indicators (per-group detail included).
+    pub fn indicators(&self) -> Indicators {
+        self.last_ind
+    }
+
+    /// Check a row without touching state. `row` is used for the message.
+    pub fn validate(&self, s: &Sample, row: u64) -> Result<(), InputError> {
+        validate_sample(s, row)?;
+        if let Some(lt) = self.last_t {
+            if s.t < lt {
+                return Err(InputError { row, field: "t", reason: format!("time goes backwards: {} after {}", s.t, lt) });
+            }
+        }
+        Ok(())
+    }
+
+    /// Process one row. On `Err` nothing changed.
+    pub fn push(&mut self, s: &Sample) -> Result<Output, InputError> {
+        self.validate(s, self.stats.rows)?;
+        Ok(self.push_valid(s))
+    }
+
+    /// Process a row already validated (see [`Detector::validate`]).
+    pub fn push_valid(&mut self, s: &Sample) -> Output {
+        self.stats.rows += 1;
+        let t = s.t;
+        let dt = self.last_t.map_or(0.0, |lt| t - lt);
+        if self.last_t.is_some() && dt > self.cfg.data_gap {
+            // Every sensor stopped: a logging gap, not a navigation fault.
+            self.stats.data_gaps += 1;
+            self.kf = None;
+            self.imu = None;
+            self.ind.reset_references();
+            self.prev_baro_h = None;
+            self.coast_start = None;
+            self.group_bad = [false; GROUPS];
+            if self.last_fix_t.is_some() {
+                self.last_fix_t = Some(t);
+            }
+        }
+        self.last_t = Some(t);
+
+        // Predict to this row's time with the IMU held from the previous row.
+        if dt > 0.0 {
+            let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
+            if let Some(kf) = self.kf.as_mut() {
+                if let Err(e) = kf.predict(dt, imu.as_ref()) {
+                    self.filter_failed(e);
+                }
+            }
+        }
+        if s.has_accel() && s.has_attitude() {
+            if let Some(q) = quat_from_wxyz(s.qw, s.qx, s.qy, s.qz) {
+                self.imu = Some((t, ImuInput { f_body: Vector3::new(s.ax, s.ay, s.az), q }));
+                self.stats.imu_rows += 1;
+            }
+        }
+        if s.has_baro() {
+            self.stats.baro_rows += 1;
+            self.baro_row(s.baro);
+        }
+
+        let mut out = if s.has_fix() {
+            self.gps_epoch(s)
+        } else {
+            let mut o = self.last;
+            o.gps_epoch = false;
+            if self.is_outage(t, s) {
+                o.status = 1;
+                o.kind = kind::OUTAGE;
+                o.f = 1.0;
+                // The filter coasts; the first fix back is judged against it.
+                if self.coast_start.is_none() {
+                    self.coast_start = self.last_fix_t;
+                }
+            } else if o.kind == kind::OUTAGE {
+                o.status = 0;
+                o.kind = kind::NORMAL;
+            }
+            o
+        };
+        out.t = t;
+        self.last = out;
+        out
+    }
+
+    fn is_outage(&self, t: f64, s: &Sample) -> bool {
+        let Some(lf) = self.last_fix_t else { return false };
+        if !self.fix_seen || !self.flying() {
+            return false;
+        }
+        let timeout = self.cfg.outage_timeout.unwrap_or(1.5 * self.gps_dt + 0.02);
+        t - lf > timeout || (s.reports_no_fix() && t - lf > 0.5 * self.gps_dt)
+    }
+
+    /// Flying: moving faster than 1 m/s or more than 2 m above the anchor.
+    fn flying(&self) -> bool {
+        match &self.kf {
+            Some(kf) => kf.velocity().norm() > 1.0 || -kf.position()[2] > 2.0,
+            None => false,
+        }
+    }
+
+    fn filter_failed(&mut self, _e: FilterError) {
+        // Re-initialise at the next fix; keep the verdict history.
+        self.stats.filter_errors += 1;
+        self.kf = None;
+        self.ind.reset_references();
+        self.prev_baro_h = None;
+    }
+
+    fn baro_row(&mut self, baro: f64) {
+        let Some(kf) = self.kf.as_mut() else { return };
+        if !kf.baro_initialised() {
+            if kf.update_baro(baro).is_ok() {
+                self.prev_baro_h = Some(-kf.position()[2] + kf.x[9]);
+            }
+            return;
+        }
+        let inn = kf.baro_innovation(baro);
+        let h_prior = -kf.x[2] + kf.x[9];
+        let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
+        let prev = self.ind.previous(6);
+        self.ind.observe(6, inn.nu[0], m, inn.s[0]);
+        if !self.group_bad[2] {
+            match kf.update_baro(baro) {
+                Ok(()) => {
+                    let p_post = kf.P[(2, 2)] + kf.P[(9, 9)] - 2.0 * kf.P[(2, 9)];
+                    self.ind.accept(6, prev, p_post);
+                }
+                Err(e) => {
+                    self.filter_failed(e);
+                    return;
+                }
+            }
+        }
+        if let Some(kf) = self.kf.as_ref() {
+            self.prev_baro_h = Some(-kf.x[2] + kf.x[9]);
+        }
+    }
+
+    fn gps_epoch(&mut self, s: &Sample) -> Output {
+        self.stats.gps_epochs += 1;
+        let t = s.t;
+        if let Some(lf) = self.last_fix_t {
+            let d = t - lf;
+            if d > 0.0 && d < 5.0 {
+                // Learn the GPS period for the outage timeout.
+                self.gps_dt += 0.05 * (d - self.gps_dt);
+            }
+        }
+        let anchor = *self.anchor.get_or_insert_with(|| Anchor::from_sample(s));
+        let y = anchor.to_ned(s);
+        let vel = s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd));
+        self.last_fix_t = Some(t);
+        self.fix_seen = true;
+
+        let Some(kf) = self.kf.as_mut() else {
+            let noise = self.cfg.filter_noise();
+            let v0 = vel.unwrap_or_else(Vector3::zeros);
+            let vs = if vel.is_some() { noise.gps_vel } else { 3.0 };
+            self.kf = Some(Kf::new(noise, y, v0, noise.gps_pos_h, vs));
+            self.prev_pos = y;
+            self.prev_vel = v0;
+            self.ind.reset_references();
+            self.coast_start = None;
+            return Output { t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
+        };
+
+        // Residuals and predicted changes since the last epoch.
+        let pin = kf.position_innovation(&y);
+        let pos_prior = kf.position();
+        let mut prev_r = [0.0; 6];
+        for a in 0..3 {
+            prev_r[a] = self.ind.previous(a);
+            self.ind.observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
+        }
+        let vel_prior = kf.velocity();
+        if let Some(v) = &vel {
+            let vin = kf.velocity_innovation(v);
+            for a in 0..3 {
+                prev_r[3 + a] = self.ind.previous(3 + a);
+                self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.P[(3 + a, 3 + a)]);
+            }
+        }
+        let ind = self.ind.close_epoch();
+        self.last_ind = ind;
+        let x = inputs(ind.r, ind.c);
+        let f = self.anfis.eval(&x);
+        let fault = if self.oracle { s.label >= 0.5 } else { f >= self.cfg.threshold };
+
+        // Gate: during a fault, withhold the groups that departed.
+        let mut reset = false;
+        if fault {
+            let start = *self.coast_start.get_or_insert(t);
+            if t - start > self.cfg.max_coast {
+                reset = true;
+            }
+            for g in 0..GROUPS {
+                self.group_bad[g] = ind.r_group[g].is_finite() && ind.r_group[g] > GATE;
+            }
+        } else {
+            self.coast_start = None;
+            self.group_bad = [false; GROUPS];
+        }
+        let mut err = None;
+        if reset {
+            // Coasted too long to judge: re-anchor on GPS and start over.
+            kf.reset_to(&y, vel.as_ref());
+            self.stats.filter_resets += 1;
+            self.coast_start = None;
+            self.group_bad = [false; GROUPS];
+            self.ind.reset_references();
+            self.prev_baro_h = None;
+        } else {
+            if !self.group_bad[0] {
+                match kf.update_position(&y) {
+                    Ok(()) => {
+                        for a in 0..3 {
+                            self.ind.accept(a, prev_r[a], kf.P[(a, a)]);
+                        }
+                    }
+                    Err(e) => err = Some(e),
+                }
+            }
+            if let (Some(v), false, None) = (&vel, self.group_bad[1], &err) {
+                match kf.update_velocity(v) {
+                    Ok(()) => {
+                        for a in 0..3 {
+                            self.ind.accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)]);
+                        }
+                    }
+                    Err(e) => err = Some(e),
+                }
+            }
+        }
+        self.prev_pos = kf.position();
+        self.prev_vel = kf.velocity();
+        if let Some(e) = err {
+            self.filter_failed(e);
+        }
+
+        // Online cycle: file this epoch by its own verdict (eqs. 15–20).
+        if fault {
+            self.d2.push(x);
+            self.new_faults += 1;
+            if self.cfg.retrain && !self.oracle && self.new_faults >= self.cfg.tc {
+                self.retrain();
+            }
+        } else {
+            self.d1.push(x);
+        }
+        let driver = ind.r_driver().map_or(255, |g| g as u8);
+        Output {
+            t,
+            status: fault as u8,
+            f,
+            r: ind.r,
+            c: ind.c,
+            kind: if fault { kind::RESIDUAL } else { kind::NORMAL },
+            gps_epoch: true,
+            driver,
+        }
+    }
+
+    /// Retrain the ANFIS on D1 ∪ D2 (hybrid learning). Keeps the old model
+    /// if training produces anything non-finite.
+    pub fn retrain(&mut self) {
+        self.new_faults = 0;
+        self.train_x.clear();
+        self.train_y.clear();
+        for x in self.d1.items() {
+            self.train_x.push(*x);
+            self.train_y.push(0.0);
+        }
+        for x in self.d2.items() {
+            self.train_x.push(*x);
+            self.train_y.push(1.0);
+        }
+        let mut cand = self.anfis.clone();
+        cand.train_hybrid(&self.train_x, &self.train_y, TRAIN_EPOCHS, TRAIN_LR);
+        if cand.is_finite() {
+            self.anfis = cand;
+            self.stats.retrains += 1;
+        }
+    }
+}
+
+/// Valid ranges per column: a value outside is an input error.
+fn range_of(i: usize) -> (f64, f64) {
+    match i {
+        0 => (-1e12, 1e12),            // t, s
+        1 => (-90.0, 90.0),            // lat
+        2 => (-180.0, 180.0),          // lon
+        3 => (-2000.0, 1e5),           // alt, m
+        4..=6 => (-1e7, 1e7),          // pn/pe/pd, m
+        7..=9 => (-2000.0, 2000.0),    // velocity, m/s
+        10 => (0.0, 100.0),            // fix
+        11 => (0.0, 1000.0),           // sats
+        12 | 13 => (0.0, 1e12),        // eph/epv, m
+        14..=16 => (-2000.0, 2000.0),  // accel, m/s²
+        17..=19 => (-200.0, 200.0),    // gyro, rad/s
+        20..=23 => (-2.0, 2.0),        // quaternion
+        24 => (-2000.0, 1e5),          // baro, m
+        _ => (f64::NEG_INFINITY, f64::INFINITY),
+    }
+}
+
+const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] = [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
+
+/// Check one row: `t` present and finite, no infinities, every value in its
+/// range, sensor groups complete (all three axes or none).
+pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
+    use crate::sample::COLUMNS;
+    if !s.t.is_finite() {
+        return Err(InputError { row, field: "t", reason: format!("required and must be finite, got {}", s.t) });
+    }
+    for (i, name) in COLUMNS.iter().enumerate() {
+        let v = s.get(i);
+        if v.is_nan() {
+            continue;
+        }
+        let (lo, hi) = range_of(i);
+        if !v.is_finite() || v < lo || v > hi {
+            return Err(InputError { row, field: name, reason: format!("value {v} outside [{lo}, {hi}]") });
+        }
+    }
+    for g in GROUPS_ALL_OR_NONE.iter().map(|g| g.as_slice()).chain(core::iter::once([20usize, 21, 22, 23].as_slice())) {
+        let present = g.iter().filter(|&&i| !s.get(i).is_nan()).count();
+        if present != 0 && present != g.len() {
+            let missing = g.iter().find(|&&i| s.get(i).is_nan()).copied().unwrap_or(g[0]);
+            let have = g.iter().find(|&&i| !s.get(i).is_nan()).copied().unwrap_or(g[0]);
+            return Err(InputError {
+                row,
+                field: COLUMNS[missing],
+                reason: format!("missing (NaN) while '{}' is present", COLUMNS[have]),
+            });
+        }
+    }
+    if s.has_attitude() && quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_none() {
+        return Err(InputError { row, field: "qw", reason: "quaternion norm must be near 1".into() });
+    }
+    Ok(())
+}

@@ -1,0 +1,438 @@
+//! Loosely coupled GPS/INS Kalman filter in local NED.
+//!
+//! State `x` (10): position NED (m), velocity NED (m/s), accelerometer bias in
+//! the body frame (m/s²), barometer offset (m, baro altitude minus true
+//! altitude). Prediction runs at IMU rate from the specific force rotated by
+//! the attitude quaternion with gravity added; with no fresh IMU it falls back
+//! to a constant-velocity model with a larger process noise, so GPS-only
+//! streams work. Updates are sequential scalar updates in Joseph form, which
+//! keeps `P` symmetric positive semi-definite in floating point.
+
+#![allow(non_snake_case)] // textbook names: P, Q, F, K, C
+
+use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Quaternion, Vector3};
+
+/// State dimension.
+pub const N: usize = 10;
+pub type StateVec = SVector<f64, N>;
+pub type StateMat = SMatrix<f64, N, N>;
+
+/// Standard gravity, m/s², NED down positive.
+pub const GRAVITY: f64 = 9.80665;
+
+const IP: usize = 0; // position block start
+const IV: usize = 3; // velocity block start
+const IB: usize = 6; // accel-bias block start
+const IBARO: usize = 9;
+
+/// Noise settings of the filter (all 1-sigma).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterNoise {
+    /// White accelerometer noise density used with IMU, m/s² (per sqrt(s) scaled by dt).
+    pub accel: f64,
+    /// Acceleration noise of the constant-velocity model (no IMU), m/s².
+    pub cv_accel: f64,
+    /// Accelerometer bias random walk, m/s² per sqrt(s).
+    pub accel_bias_rw: f64,
+    /// Barometer offset random walk, m per sqrt(s).
+    pub baro_rw: f64,
+    /// GPS horizontal / vertical position noise, m.
+    pub gps_pos_h: f64,
+    pub gps_pos_v: f64,
+    /// GPS velocity noise, m/s.
+    pub gps_vel: f64,
+    /// Barometer noise, m.
+    pub baro: f64,
+}
+
+impl Default for FilterNoise {
+    fn default() -> Self {
+        FilterNoise {
+            accel: 0.35,
+            cv_accel: 3.0,
+            accel_bias_rw: 0.005,
+            baro_rw: 0.05,
+            gps_pos_h: 1.0,
+            gps_pos_v: 1.5,
+            gps_vel: 0.15,
+            baro: 0.5,
+        }
+    }
+}
+
+/// Why the filter refused to go on.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FilterError {
+    /// `P` lost finiteness or positive diagonal; holds the offending index.
+    CovarianceUnhealthy(usize),
+    /// A non-finite input reached the filter.
+    NonFinite(&'static str),
+}
+
+impl core::fmt::Display for FilterError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            FilterError::CovarianceUnhealthy(i) => {
+                write!(f, "Kalman covariance unhealthy at state {i} (non-finite or negative variance)")
+            }
+            FilterError::NonFinite(what) => write!(f, "non-finite {what} reached the Kalman filter"),
+        }
+    }
+}
+
+/// Specific-force input for one prediction step.
+#[derive(Clone, Copy, Debug)]
+pub struct ImuInput {
+    /// Specific force, body FRD, m/s².
+    pub f_body: Vector3<f64>,
+    /// Attitude body -> NED.
+    pub q: UnitQuaternion<f64>,
+}
+
+/// Result of one measurement update (or of a rejected one): the innovation
+/// `nu = y - H x⁻` and its variance `S = H P⁻ Hᵀ + R`, per scalar channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Innovation<const M: usize> {
+    pub nu: [f64; M],
+    pub s: [f64; M],
+}
+
+impl<const M: usize> Default for Innovation<M> {
+    fn default() -> Self {
+        Innovation { nu: [0.0; M], s: [0.0; M] }
+    }
+}
+
+/// The filter.
+#[derive(Clone, Debug)]
+pub struct Kf {
+    pub x: StateVec,
+    pub P: StateMat,
+    pub noise: FilterNoise,
+    baro_initialised: bool,
+}
+
+impl Kf {
+    /// Start at position `p` (NED, m) and velocity `v` (m/s) with the given
+    /// 1-sigma uncertainties.
+    pub fn new(noise: FilterNoise, p: Vector3<f64>, v: Vector3<f64>, p_sigma: f64, v_sigma: f64) -> Self {
+        let mut x = StateVec::zeros();
+        x.fixed_rows_mut::<3>(IP).copy_from(&p);
+        x.fixed_rows_mut::<3>(IV).copy_from(&v);
+        let mut P = StateMat::zeros();
+        for i in 0..3 {
+            P[(IP + i, IP + i)] = p_sigma * p_sigma;
+            P[(IV + i, IV + i)] = v_sigma * v_sigma;
+            P[(IB + i, IB + i)] = 0.1 * 0.1;
+        }
+        P[(IBARO, IBARO)] = 100.0;
+        Kf { x, P, noise, baro_initialised: false }
+    }
+
+    pub fn position(&self) -> Vector3<f64> {
+        self.x.fixed_rows::<3>(IP).into_owned()
+    }
+
+    pub fn velocity(&self) -> Vector3<f64> {
+        self.x.fixed_rows::<3>(IV).into_owned()
+    }
+
+    pub fn accel_bias(&self) -> Vector3<f64> {
+        self.x.fixed_rows::<3>(IB).into_owned()
+    }
+
+    /// Propagate by `dt` s. With `imu`, strapdown mechanisation in NED
+    /// (flat earth: a few km around the anchor); without, constant velocity.
+    pub fn predict(&mut self, dt: f64, imu: Option<&ImuInput>) -> Result<(), FilterError> {
+        if !dt.is_finite() || dt < 0.0 {
+            return Err(FilterError::NonFinite("time step"));
+        }
+        if dt == 0.0 {
+            return Ok(());
+        }
+        let mut F = StateMat::identity();
+        let mut Q = StateMat::zeros();
+        let dt2 = dt * dt;
+        let q_acc;
+        match imu {
+            Some(u) => {
+                let C: Matrix3<f64> = u.q.to_rotation_matrix().into_inner();
+                let f = u.f_body - self.accel_bias();
+                let a = C * f + Vector3::new(0.0, 0.0, GRAVITY);
+                if !a.iter().all(|v| v.is_finite()) {
+                    return Err(FilterError::NonFinite("acceleration"));
+                }
+                let p = self.position() + self.velocity() * dt + a * (0.5 * dt2);
+                let v = self.velocity() + a * dt;
+                self.x.fixed_rows_mut::<3>(IP).copy_from(&p);
+                self.x.fixed_rows_mut::<3>(IV).copy_from(&v);
+                F.fixed_view_mut::<3, 3>(IV, IB).copy_from(&(-C * dt));
+                F.fixed_view_mut::<3, 3>(IP, IB).copy_from(&(-C * (0.5 * dt2)));
+                q_acc = self.noise.accel * self.noise.accel;
+                let qb = self.noise.accel_bias_rw * self.noise.accel_bias_rw * dt;
+                for i in 0..3 {
+                    Q[(IB + i, IB + i)] = qb;
+                }
+            }
+            None => {
+                let v = self.velocity();
+                let p = self.position() + v * dt;
+                self.x.fixed_rows_mut::<3>(IP).copy_from(&p);
+                q_acc = self.noise.cv_accel * self.noise.cv_accel;
+            }
+        }
+        for i in 0..3 {
+            F[(IP + i, IV + i)] = dt;
+            // White acceleration noise integrated over dt (continuous-white-noise model).
+            Q[(IP + i, IP + i)] = q_acc * dt2 * dt / 3.0;
+            Q[(IP + i, IV + i)] = q_acc * dt2 / 2.0;
+            Q[(IV + i, IP + i)] = q_acc * dt2 / 2.0;
+            Q[(IV + i, IV + i)] = q_acc * dt;
+        }
+        Q[(IBARO, IBARO)] = self.noise.baro_rw * self.noise.baro_rw * dt;
+        self.P = F * self.P * F.transpose() + Q;
+        self.check_health()
+    }
+
+    /// Predicted GPS position innovation without updating.
+    pub fn position_innovation(&self, y: &Vector3<f64>) -> Innovation<3> {
+        let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v];
+        let mut out = Innovation::<3>::default();
+        for i in 0..3 {
+            out.nu[i] = y[i] - self.x[IP + i];
+            out.s[i] = self.P[(IP + i, IP + i)] + r[i] * r[i];
+        }
+        out
+    }
+
+    /// Predicted GPS velocity innovation without updating.
+    pub fn velocity_innovation(&self, y: &Vector3<f64>) -> Innovation<3> {
+        let r = self.noise.gps_vel;
+        let mut out = Innovation::<3>::default();
+        for i in 0..3 {
+            out.nu[i] = y[i] - self.x[IV + i];
+            out.s[i] = self.P[(IV + i, IV + i)] + r * r;
+        }
+        out
+    }
+
+    /// Predicted barometer innovation (baro is altitude up: -pD + offset).
+    pub fn baro_innovation(&self, baro: f64) -> Innovation<1> {
+        let r = self.noise.baro;
+        Innovation {
+            nu: [baro - (-self.x[IP + 2] + self.x[IBARO])],
+            s: [self.P[(IP + 2, IP + 2)] + self.P[(IBARO, IBARO)] - 2.0 * self.P[(IP + 2, IBARO)] + r * r],
+        }
+    }
+
+    /// GPS position update (m, NED).
+    pub fn update_position(&mut self, y: &Vector3<f64>) -> Result<(), FilterError> {
+        let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v];
+        for i in 0..3 {
+            let mut h = SVector::<f64, N>::zeros();
+            h[IP + i] = 1.0;
+            self.scalar_update(&h, y[i], r[i] * r[i])?;
+        }
+        self.check_health()
+    }
+
+    /// GPS velocity update (m/s, NED).
+    pub fn update_velocity(&mut self, y: &Vector3<f64>) -> Result<(), FilterError> {
+        let r = self.noise.gps_vel;
+        for i in 0..3 {
+            let mut h = SVector::<f64, N>::zeros();
+            h[IV + i] = 1.0;
+            self.scalar_update(&h, y[i], r * r)?;
+        }
+        self.check_health()
+    }
+
+    /// Barometer update (m, altitude up). The first one fixes the offset
+    /// between barometric and GPS altitude, since they share no datum.
+    pub fn update_baro(&mut self, baro: f64) -> Result<(), FilterError> {
+        if !baro.is_finite() {
+            return Err(FilterError::NonFinite("baro"));
+        }
+        if !self.baro_initialised {
+            self.x[IBARO] = baro + self.x[IP + 2];
+            self.P[(IBARO, IBARO)] = self.P[(IP + 2, IP + 2)] + self.noise.baro * self.noise.baro;
+            self.baro_initialised = true;
+            return Ok(());
+        }
+        let mut h = SVector::<f64, N>::zeros();
+        h[IP + 2] = -1.0;
+        h[IBARO] = 1.0;
+        self.scalar_update(&h, baro, self.noise.baro * self.noise.baro)?;
+        self.check_health()
+    }
+
+    pub fn baro_initialised(&self) -> bool {
+        self.baro_initialised
+    }
+
+    /// Move position and velocity onto a measurement (after a long coast),
+    /// keeping biases; position/velocity uncertainty reset to the sensor's.
+    pub fn reset_to(&mut self, p: &Vector3<f64>, v: Option<&Vector3<f64>>) {
+        for i in 0..3 {
+            self.x[IP + i] = p[i];
+            if let Some(v) = v {
+                self.x[IV + i] = v[i];
+            }
+        }
+        for i in 0..6 {
+            for j in 0..N {
+                if i != j {
+                    self.P[(i, j)] = 0.0;
+                    self.P[(j, i)] = 0.0;
+                }
+            }
+        }
+        let (h, vv) = (self.noise.gps_pos_h, self.noise.gps_pos_v);
+        self.P[(0, 0)] = h * h;
+        self.P[(1, 1)] = h * h;
+        self.P[(2, 2)] = vv * vv;
+        let sv = if v.is_some() { self.noise.gps_vel } else { 3.0 };
+        for i in 3..6 {
+            self.P[(i, i)] = sv * sv;
+        }
+        self.baro_initialised = false;
+    }
+
+    /// One scalar update `y = hᵀx + e`, `e ~ N(0, r)`, Joseph form.
+    fn scalar_update(&mut self, h: &SVector<f64, N>, y: f64, r: f64) -> Result<(), FilterError> {
+        if !y.is_finite() {
+            return Err(FilterError::NonFinite("measurement"));
+        }
+        let ph = self.P * h;
+        let s = h.dot(&ph) + r;
+        if !(s.is_finite() && s > 0.0) {
+            return Err(FilterError::CovarianceUnhealthy(0));
+        }
+        let k = ph / s;
+        let nu = y - h.dot(&self.x);
+        self.x += k * nu;
+        let ikh = StateMat::identity() - k * h.transpose();
+        self.P = ikh * self.P * ikh.transpose() + k * k.transpose() * r;
+        Ok(())
+    }
+
+    /// Symmetrise and check `P`: finite, positive diagonal.
+    fn check_health(&mut self) -> Result<(), FilterError> {
+        let pt = self.P.transpose();
+        self.P = (self.P + pt) * 0.5;
+        for i in 0..N {
+            let d = self.P[(i, i)];
+            if !(d.is_finite() && d > 0.0) {
+                return Err(FilterError::CovarianceUnhealthy(i));
+            }
+        }
+        if !self.P.iter().all(|v| v.is_finite()) || !self.x.iter().all(|v| v.is_finite()) {
+            return Err(FilterError::CovarianceUnhealthy(0));
+        }
+        Ok(())
+    }
+}
+
+/// Quaternion from the contract's (w, x, y, z), normalised. `None` when the
+/// norm is far from 1 (not an attitude).
+pub fn quat_from_wxyz(w: f64, x: f64, y: f64, z: f64) -> Option<UnitQuaternion<f64>> {
+    let q = Quaternion::new(w, x, y, z);
+    let n = q.norm();
+    if !(n.is_finite() && (0.5..=1.5).contains(&n)) {
+        return None;
+    }
+    Some(UnitQuaternion::from_quaternion(q))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_abs_diff_eq;
+    use proptest::prelude::*;
+
+    fn level() -> UnitQuaternion<f64> {
+        UnitQuaternion::identity()
+    }
+
+    #[test]
+    fn hover_specific_force_cancels_gravity() {
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 1.0, 0.1);
+        let imu = ImuInput { f_body: Vector3::new(0.0, 0.0, -GRAVITY), q: level() };
+        for _ in 0..100 {
+            kf.predict(0.01, Some(&imu)).unwrap();
+        }
+        assert_abs_diff_eq!(kf.velocity().norm(), 0.0, epsilon = 1e-12);
+        assert_abs_diff_eq!(kf.position().norm(), 0.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn forward_acceleration_integrates() {
+        // 1 m/s² forward for 2 s, body yawed 90° (nose east): east velocity 2 m/s, 2 m east.
+        let q = UnitQuaternion::from_euler_angles(0.0, 0.0, core::f64::consts::FRAC_PI_2);
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 1.0, 0.1);
+        let imu = ImuInput { f_body: Vector3::new(1.0, 0.0, -GRAVITY), q };
+        for _ in 0..200 {
+            kf.predict(0.01, Some(&imu)).unwrap();
+        }
+        assert_abs_diff_eq!(kf.velocity()[1], 2.0, epsilon = 1e-9);
+        assert_abs_diff_eq!(kf.velocity()[0], 0.0, epsilon = 1e-9);
+        assert_abs_diff_eq!(kf.position()[1], 2.0, epsilon = 1e-9);
+    }
+
+    #[test]
+    fn scalar_update_matches_closed_form() {
+        // Prior var 4, meas var 1 at offset 5: gain 0.8, posterior 4, var 0.8.
+        let mut kf = Kf::new(FilterNoise { gps_pos_h: 1.0, ..FilterNoise::default() }, Vector3::zeros(), Vector3::zeros(), 2.0, 0.1);
+        let inn = kf.position_innovation(&Vector3::new(5.0, 0.0, 0.0));
+        assert_abs_diff_eq!(inn.nu[0], 5.0);
+        assert_abs_diff_eq!(inn.s[0], 5.0);
+        kf.update_position(&Vector3::new(5.0, 0.0, 0.0)).unwrap();
+        assert_abs_diff_eq!(kf.position()[0], 4.0, epsilon = 1e-12);
+        assert_abs_diff_eq!(kf.P[(0, 0)], 0.8, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn cv_model_covariance_growth() {
+        // Constant-velocity: var(p) grows by q dt³/3 + dt² var(v).
+        let noise = FilterNoise { cv_accel: 2.0, ..FilterNoise::default() };
+        let mut kf = Kf::new(noise, Vector3::zeros(), Vector3::new(1.0, 0.0, 0.0), 1.0, 0.5);
+        kf.predict(1.0, None).unwrap();
+        assert_abs_diff_eq!(kf.position()[0], 1.0, epsilon = 1e-12);
+        assert_abs_diff_eq!(kf.P[(0, 0)], 1.0 + 0.25 + 4.0 / 3.0, epsilon = 1e-12);
+        assert_abs_diff_eq!(kf.P[(3, 3)], 0.25 + 4.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn non_finite_input_is_an_error_not_a_panic() {
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 1.0, 0.1);
+        assert!(kf.predict(f64::NAN, None).is_err());
+        assert!(kf.update_position(&Vector3::new(f64::NAN, 0.0, 0.0)).is_err());
+        let imu = ImuInput { f_body: Vector3::new(1e308, 1e308, 1e308), q: level() };
+        assert!(kf.predict(1e10, Some(&imu)).is_err());
+    }
+
+    proptest! {
+        #[test]
+        fn covariance_stays_symmetric_psd(
+            steps in proptest::collection::vec((0.001f64..0.5, -20.0f64..20.0, -20.0f64..20.0, -30.0f64..10.0, 0u8..4), 1..120),
+            yaw in -3.2f64..3.2, pitch in -0.8f64..0.8,
+        ) {
+            let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 3.0, 1.0);
+            let q = UnitQuaternion::from_euler_angles(0.1, pitch, yaw);
+            for (dt, a, b, c, kind) in steps {
+                let imu = ImuInput { f_body: Vector3::new(a, b, c), q };
+                kf.predict(dt, if kind == 3 { None } else { Some(&imu) }).unwrap();
+                match kind {
+                    0 => kf.update_position(&Vector3::new(a, b, c)).unwrap(),
+                    1 => kf.update_velocity(&Vector3::new(b, a, 0.1 * c)).unwrap(),
+                    2 => kf.update_baro(c).unwrap(),
+                    _ => {}
+                }
+                let P = kf.P;
+                prop_assert!((P - P.transpose()).abs().max() <= 1e-9 * P.abs().max().max(1.0));
+                let eig = P.symmetric_eigen();
+                prop_assert!(eig.eigenvalues.min() > -1e-9 * P.abs().max().max(1.0), "min eig {}", eig.eigenvalues.min());
+            }
+        }
+    }
+}

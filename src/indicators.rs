@@ -1,0 +1,417 @@
+//! R- and C-indicators from sliding windows of KF residual differences.
+//!
+//! Sun et al. 2017 (eq. 10–11) define the residual `r_t = y_t − x̂_t` and its
+//! difference `Δr_t = r_t − r_{t−1}`, and build an R-indicator from a sliding
+//! window of `Δr` over three axes and a C-indicator from a Pearson correlation
+//! test over the same windows, without giving formulas. Ours, per GPS epoch:
+//!
+//! **Residual.** `r_t` is the innovation `y_t − H x̂⁻_t` of each measured axis
+//! (GPS position N/E/D, GPS velocity N/E/D, barometric altitude), taken before
+//! the update so a fault cannot pull the estimate it is judged against.
+//!
+//! **R-indicator (departure).** For each axis
+//! `d_t = (r_t − r_ref) / sqrt(σ²_Δ + max(0, P⁻_t − P⁺_ref))`, where `r_ref` is
+//! the residual of the last epoch the detector *accepted* as normal. While
+//! everything is normal `r_ref = r_{t−1}` and `d_t` is exactly the paper's
+//! `Δr_t`, scaled. During a fault the reference stays put, so a step, a
+//! frozen output or a ramp keeps `d` large for as long as it lasts instead of
+//! only at its edges. `σ_Δ` is learnt from accepted epochs (a winsorised
+//! exponential mean square of `Δr`, floored by the config), and the `P` term
+//! adds the prediction uncertainty gathered while the filter coasted.
+//! Per group (position, velocity, baro) we take the RMS of `d` over the axes
+//! and over a long window of `w` epochs and a short one of `⌈w/4⌉` epochs, and
+//! keep the *smaller*: a departure must be both sustained and current, so the
+//! indicator rises at the first faulty epoch (the long window contains it at
+//! full weight) and falls at the first clean one (the short window has moved
+//! on). `R = max` over groups; `R ≈ 1` on clean data.
+//!
+//! **C-indicator (motion correlation).** Per group, the Pearson correlation
+//! through the origin between the consecutive `Δr_t` and the filter's own
+//! predicted change of the same quantity `m_t = H (x̂⁻_t − x̂⁺_{t−1})` over the
+//! window (axes pooled). Means are fixed at zero because both are zero-mean
+//! increments under the no-fault hypothesis, and it keeps a constant-speed
+//! leg from cancelling out. A healthy sensor's `Δr` is noise, uncorrelated
+//! with motion (`|ρ|` of order `1/sqrt(3w)`); a sensor that stops following
+//! the motion (frozen GPS, a stuck barometer in a climb, the paper's
+//! collective and contextual faults) gives `Δr ≈ −m` and `|ρ| → 1`.
+//! `C = max` over groups of `|ρ|`, in `[0, 1]`.
+//!
+//! All window sums are running sums (add the new epoch, subtract the one that
+//! leaves), re-summed exactly once per window length to shed rounding, so the
+//! per-epoch cost is O(1) in `w`.
+
+/// Residual groups: GPS position, GPS velocity, barometer.
+pub const GROUPS: usize = 3;
+/// Group names as reported.
+pub const GROUP_NAMES: [&str; GROUPS] = ["gps_position", "gps_velocity", "baro"];
+/// Axes: pos N/E/D, vel N/E/D, baro.
+pub const AXES: usize = 7;
+
+/// Group of an axis.
+pub const fn group_of(axis: usize) -> usize {
+    if axis < 3 {
+        0
+    } else if axis < 6 {
+        1
+    } else {
+        2
+    }
+}
+
+// Per-group sums kept per epoch: Σd², n, Σem, Σee, Σmm.
+const K: usize = 5;
+const SUMS: usize = GROUPS * K;
+
+/// Fixed-capacity ring of per-epoch sums with running totals.
+#[derive(Clone, Debug)]
+pub struct SlidingSum {
+    buf: Vec<[f64; SUMS]>,
+    head: usize,
+    len: usize,
+    total: [f64; SUMS],
+    since_resum: usize,
+}
+
+impl SlidingSum {
+    pub fn new(cap: usize) -> Self {
+        let cap = cap.max(1);
+        SlidingSum { buf: vec![[0.0; SUMS]; cap], head: 0, len: 0, total: [0.0; SUMS], since_resum: 0 }
+    }
+
+    pub fn clear(&mut self) {
+        self.head = 0;
+        self.len = 0;
+        self.total = [0.0; SUMS];
+        self.since_resum = 0;
+    }
+
+    pub fn push(&mut self, e: &[f64; SUMS]) {
+        let cap = self.buf.len();
+        if self.len == cap {
+            let old = self.buf[self.head];
+            for i in 0..SUMS {
+                self.total[i] -= old[i];
+            }
+        } else {
+            self.len += 1;
+        }
+        self.buf[self.head] = *e;
+        for i in 0..SUMS {
+            self.total[i] += e[i];
+        }
+        self.head = (self.head + 1) % cap;
+        self.since_resum += 1;
+        if self.since_resum >= cap {
+            // Exact re-sum: subtract/add cycles leave rounding residue.
+            self.since_resum = 0;
+            self.total = [0.0; SUMS];
+            for j in 0..self.len {
+                let idx = (self.head + cap - 1 - j) % cap;
+                for i in 0..SUMS {
+                    self.total[i] += self.buf[idx][i];
+                }
+            }
+        }
+    }
+
+    pub fn total(&self) -> &[f64; SUMS] {
+        &self.total
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// Indicator values at one epoch.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Indicators {
+    /// R-indicator (dimensionless, ≈1 on clean data).
+    pub r: f64,
+    /// C-indicator, `|ρ|` in [0, 1].
+    pub c: f64,
+    /// Per-group R (NaN when the group had no data in the window).
+    pub r_group: [f64; GROUPS],
+    /// Per-group C.
+    pub c_group: [f64; GROUPS],
+}
+
+impl Indicators {
+    /// The group that drove R (largest per-group R), if any.
+    pub fn r_driver(&self) -> Option<usize> {
+        let mut best: Option<usize> = None;
+        for g in 0..GROUPS {
+            if self.r_group[g].is_finite() && best.is_none_or(|b| self.r_group[g] > self.r_group[b]) {
+                best = Some(g);
+            }
+        }
+        best
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct AxisState {
+    prev: f64,
+    r_ref: f64,
+    p_ref: f64,
+    /// Learnt mean square of Δr on accepted epochs.
+    ms: f64,
+    last_r: f64,
+    has_prev: bool,
+    has_ref: bool,
+}
+
+/// Settings for the indicator computation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IndicatorSettings {
+    /// Window length, epochs.
+    pub window: usize,
+    /// Floors of σ_Δ per group (pos m, vel m/s, baro m).
+    pub floor: [f64; GROUPS],
+    /// Initial σ_Δ per group.
+    pub initial: [f64; GROUPS],
+    /// Forgetting factor of the σ_Δ estimate (per accepted epoch).
+    pub alpha: f64,
+}
+
+impl Default for IndicatorSettings {
+    fn default() -> Self {
+        IndicatorSettings { window: 10, floor: [0.15, 0.06, 0.2], initial: [0.3, 0.1, 0.3], alpha: 0.02 }
+    }
+}
+
+/// Sliding-window indicator engine. Allocates only at construction.
+#[derive(Clone, Debug)]
+pub struct IndicatorEngine {
+    set: IndicatorSettings,
+    axes: [AxisState; AXES],
+    long: SlidingSum,
+    short: SlidingSum,
+    pending: [f64; SUMS],
+    pending_any: bool,
+    last: Indicators,
+}
+
+impl IndicatorEngine {
+    pub fn new(set: IndicatorSettings) -> Self {
+        let w = set.window.max(1);
+        let ws = w.div_ceil(4).max(1);
+        let ax = |a: usize| {
+            let s = set.initial[group_of(a)];
+            AxisState { prev: 0.0, r_ref: 0.0, p_ref: 0.0, ms: s * s, last_r: 0.0, has_prev: false, has_ref: false }
+        };
+        IndicatorEngine {
+            set,
+            axes: core::array::from_fn(ax),
+            long: SlidingSum::new(w),
+            short: SlidingSum::new(ws),
+            pending: [0.0; SUMS],
+            pending_any: false,
+            last: Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS] },
+        }
+    }
+
+    pub fn settings(&self) -> &IndicatorSettings {
+        &self.set
+    }
+
+    /// σ_Δ currently used for an axis.
+    pub fn sigma(&self, axis: usize) -> f64 {
+        let g = group_of(axis);
+        self.axes.get(axis).map_or(f64::NAN, |a| a.ms.sqrt().max(self.set.floor[g]))
+    }
+
+    /// Record one axis' residual `r` (innovation), its predicted change `m`
+    /// since the previous epoch, and its prior variance `p_prior`. Returns the
+    /// normalised departure `d`.
+    pub fn observe(&mut self, axis: usize, r: f64, m: f64, p_prior: f64) -> f64 {
+        let sigma = self.sigma(axis);
+        let Some(a) = self.axes.get_mut(axis) else { return 0.0 };
+        let g = group_of(axis);
+        if !a.has_ref {
+            a.r_ref = r;
+            a.p_ref = p_prior;
+            a.has_ref = true;
+        }
+        let var = sigma * sigma + (p_prior - a.p_ref).max(0.0);
+        let d = (r - a.r_ref) / var.sqrt();
+        let base = g * K;
+        self.pending[base] += d * d;
+        self.pending[base + 1] += 1.0;
+        if a.has_prev {
+            let e = r - a.prev;
+            // Scale e and m alike: ρ is scale-free, this only guards overflow.
+            let (e, m) = (e / sigma, m / sigma);
+            self.pending[base + 2] += e * m;
+            self.pending[base + 3] += e * e;
+            self.pending[base + 4] += m * m;
+        }
+        a.prev = r;
+        a.has_prev = true;
+        a.last_r = r;
+        self.pending_any = true;
+        d
+    }
+
+    /// The detector applied this axis' measurement: move its reference to the
+    /// current residual and learn σ_Δ from the consecutive difference.
+    pub fn accept(&mut self, axis: usize, prev_r: f64, p_post: f64) {
+        let alpha = self.set.alpha;
+        let sigma = self.sigma(axis);
+        let Some(a) = self.axes.get_mut(axis) else { return };
+        let e = a.last_r - prev_r;
+        if e.is_finite() {
+            // Winsorise at 4σ so one outlier that slipped through cannot inflate σ_Δ.
+            let lim = 16.0 * sigma * sigma;
+            a.ms += alpha * ((e * e).min(lim) - a.ms);
+        }
+        a.r_ref = a.last_r;
+        a.p_ref = p_post;
+    }
+
+    /// Residual the axis last had before the current one (for `accept`).
+    pub fn previous(&self, axis: usize) -> f64 {
+        self.axes.get(axis).map_or(f64::NAN, |a| a.prev)
+    }
+
+    /// Forget references and history (after a filter reset or a data gap).
+    pub fn reset_references(&mut self) {
+        for a in self.axes.iter_mut() {
+            a.has_prev = false;
+            a.has_ref = false;
+        }
+        self.long.clear();
+        self.short.clear();
+        self.pending = [0.0; SUMS];
+        self.pending_any = false;
+    }
+
+    /// Close the epoch: push pending sums and compute R and C.
+    pub fn close_epoch(&mut self) -> Indicators {
+        if !self.pending_any {
+            return self.last;
+        }
+        self.long.push(&self.pending);
+        self.short.push(&self.pending);
+        self.pending = [0.0; SUMS];
+        self.pending_any = false;
+        let lt = self.long.total();
+        let st = self.short.total();
+        let mut out = Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS] };
+        for g in 0..GROUPS {
+            let b = g * K;
+            if lt[b + 1] > 0.5 && st[b + 1] > 0.5 {
+                let rl = (lt[b].max(0.0) / lt[b + 1]).sqrt();
+                let rs = (st[b].max(0.0) / st[b + 1]).sqrt();
+                let rg = rl.min(rs);
+                out.r_group[g] = rg;
+                out.r = out.r.max(rg);
+            }
+            let (em, ee, mm) = (lt[b + 2], lt[b + 3], lt[b + 4]);
+            if ee > 1e-12 && mm > 1e-12 {
+                let rho = (em / (ee * mm).sqrt()).clamp(-1.0, 1.0).abs();
+                out.c_group[g] = rho;
+                out.c = out.c.max(rho);
+            }
+        }
+        self.last = out;
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_abs_diff_eq;
+
+    #[test]
+    fn sliding_sum_matches_direct_sum() {
+        let mut s = SlidingSum::new(4);
+        let vals = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0];
+        for (i, v) in vals.iter().enumerate() {
+            let mut e = [0.0; SUMS];
+            e[0] = *v;
+            s.push(&e);
+            let lo = i.saturating_sub(3);
+            let direct: f64 = vals[lo..=i].iter().sum();
+            assert_abs_diff_eq!(s.total()[0], direct, epsilon = 1e-12);
+        }
+        assert_eq!(s.len(), 4);
+    }
+
+    fn settings(w: usize) -> IndicatorSettings {
+        IndicatorSettings { window: w, floor: [0.1, 0.1, 0.1], initial: [0.1, 0.1, 0.1], alpha: 0.0 }
+    }
+
+    #[test]
+    fn r_indicator_hand_computed() {
+        // w=4 (short window 1). Epoch 1: d = 0. Epoch 2: residual 0.2 on each
+        // pos axis, not accepted: d = 2 on 3 axes. Long RMS over 6 axis-terms
+        // = sqrt(12/6) = 1.414; short = sqrt(12/3) = 2; R = 1.414.
+        let mut e = IndicatorEngine::new(settings(4));
+        for a in 0..3 {
+            e.observe(a, 0.0, 0.0, 0.0);
+        }
+        let i1 = e.close_epoch();
+        assert_abs_diff_eq!(i1.r, 0.0);
+        for a in 0..3 {
+            e.observe(a, 0.2, 0.0, 0.0);
+        }
+        let i2 = e.close_epoch();
+        assert_abs_diff_eq!(i2.r, 2.0f64.sqrt(), epsilon = 1e-12);
+        assert_abs_diff_eq!(i2.r_group[0], 2.0f64.sqrt(), epsilon = 1e-12);
+        assert!(i2.r_group[1].is_nan());
+    }
+
+    #[test]
+    fn departure_persists_while_not_accepted_and_clears_when_it_ends() {
+        let mut e = IndicatorEngine::new(settings(8));
+        let mut rs = vec![];
+        // 3 normal epochs (accepted), 5 epochs with a 1 m step (rejected), 3 normal.
+        let seq: Vec<f64> = [0.0; 3].iter().chain([1.0; 5].iter()).chain([0.0; 3].iter()).cloned().collect();
+        for (k, r) in seq.iter().enumerate() {
+            let prev = e.previous(0);
+            e.observe(0, *r, 0.0, 0.0);
+            let ind = e.close_epoch();
+            rs.push(ind.r);
+            if !(3..8).contains(&k) {
+                e.accept(0, prev, 0.0);
+            }
+        }
+        for k in 3..8 {
+            assert!(rs[k] > 2.5, "epoch {k}: R={} should stay high during the step", rs[k]);
+        }
+        // Short window is ⌈8/4⌉=2 epochs: first clean epoch still shares it with the last faulty one.
+        assert!(rs[9] < 1e-9, "R must fall once the short window is clean: {:?}", rs);
+    }
+
+    #[test]
+    fn c_indicator_is_one_for_a_frozen_sensor_and_small_for_noise() {
+        let mut e = IndicatorEngine::new(settings(10));
+        // Frozen: residual change equals minus the predicted motion.
+        let mut r = 0.0;
+        for k in 0..10 {
+            let m = 0.5 + 0.01 * k as f64;
+            r -= m;
+            e.observe(0, r, m, 0.0);
+            e.observe(1, 0.0, 0.0, 0.0);
+            e.close_epoch();
+        }
+        let i = e.close_epoch();
+        assert_abs_diff_eq!(i.c, 1.0, epsilon = 1e-9);
+        // Noise uncorrelated with motion: alternate-sign residual changes.
+        let mut e = IndicatorEngine::new(settings(10));
+        let mut last = Indicators::default();
+        for k in 0..10 {
+            let r = if k % 2 == 0 { 0.1 } else { -0.1 };
+            e.observe(0, r, 0.5, 0.0);
+            last = e.close_epoch();
+        }
+        // Σ e·m = 0.5·(−0.2 + 0.2 − …) over 9 diffs = −0.1 ⇒ |ρ| = 0.1·... small.
+        assert!(last.c < 0.35, "C={}", last.c);
+    }
+}

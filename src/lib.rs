@@ -1,0 +1,24 @@
+//! navguard: UAV navigation-sensor fault detection.
+//!
+//! A pure-Rust core (this crate's modules) implementing the online KF–ANFIS
+//! detector of Sun et al. 2017, with a thin wasm-bindgen facade in
+//! [`wasm`] (compiled for `wasm32` only).
+
+pub mod anfis;
+pub mod audit;
+pub mod config;
+pub mod detector;
+pub mod filter;
+pub mod frames;
+pub mod indicators;
+pub mod logs;
+pub mod metrics;
+pub mod sample;
+pub mod sim;
+
+#[cfg(target_arch = "wasm32")]
+pub mod wasm;
+
+pub use config::{Config, ConfigInput};
+pub use detector::{Detector, InputError, Model, Output};
+pub use sample::Sample;

@@ -1,0 +1,1777 @@
+//! ArduPilot DataFlash (`.bin`) log reader.
+//!
+//! # Format
+//! A DataFlash log is a flat stream of messages, each `0xA3 0x95 <type u8>`
+//! followed by a fixed-size little-endian payload. The layout of every type
+//! is declared in-band by `FMT` messages (type 128, 89 bytes: Type `B`,
+//! Length `B` incl. the 3-byte header, Name `n`, Format `N`, Columns `Z`).
+//! Newer logs add `FMTU` (unit and multiplier ids per column).
+//!
+//! Format characters (size in bytes, decoded value):
+//! `b` i8, `B` u8, `M` flight mode u8, `h` i16, `H` u16, `i` i32, `I` u32,
+//! `q` i64, `Q` u64, `f` f32, `d` f64, `g` f16, `c` i16/100, `C` u16/100,
+//! `e` i32/100, `E` u32/100, `L` i32/1e7 (deg), `n` char[4], `N` char[16],
+//! `Z` char[64], `a` i16[32].
+//!
+//! # Speed
+//! On each `FMT` the byte offsets of the few columns we map are computed once;
+//! a message of any other type is only counted and skipped, so the hot loop
+//! touches 3 header bytes per unmapped message.
+//!
+//! # Mapping to [`Sample`] rows (one row per message, `t` = boot clock, s)
+//! * `GPS` (instance 0) -> `fix` (= Status: 0 no GPS, 1 no fix, 2 2D, 3 3D,
+//!   4 DGPS, 5/6 RTK), `sats`, and only when Status >= 2: `lat`/`lon` (deg),
+//!   `alt` (m AMSL), `vn = Spd cos(GCrs)`, `ve = Spd sin(GCrs)` (m/s),
+//!   `vd = VZ` (m/s, **positive down**: ArduPilot logs `velocity.z` of its NED
+//!   velocity; on `Loiter_RTL.bin` VZ correlates at about -0.85 with the rate
+//!   of change of GPS altitude), `eph` (see below). A row with Status < 2 keeps
+//!   position and velocity NaN: it means "no fix at this instant".
+//! * `eph`: `GPA.HAcc` (m) when a `GPA` message accompanies the fix (newer
+//!   logs); otherwise HDop is used as a proxy in metres, i.e. a user range
+//!   error of 1 m (`eph = HDop * 1 m`). HDop 99.99 ("unknown") passes through
+//!   as a large eph; HDop 0 gives NaN. `epv` only from `GPA.VAcc`.
+//! * `IMU` (instance 0; older logs name further IMUs `IMU2`, `IMU3`, which
+//!   are only counted) -> `ax..az` (AccX..Z, m/s², body FRD) and `gx..gz`
+//!   (GyrX..Z, rad/s).
+//! * `ATT` Roll/Pitch/Yaw (deg; `c`/`C` centidegrees in the log) -> a
+//!   Hamilton quaternion body FRD -> NED, ZYX order, canonical sign `qw >= 0`.
+//!   No row of its own: the newest attitude at or before an IMU row's time,
+//!   if at most 0.5 s old, is put on that row.
+//! * `BARO` (instance 0) `Alt` -> `baro` (m above the boot calibration level).
+//!
+//! # Time
+//! `TimeUS` (µs) in current logs, `TimeMS` (ms) in 2014-era logs. The old
+//! `GPS` message is the exception: there `TimeMS` is the **GPS time of
+//! week**, and the boot time is the field `T` (ms), which is what we use.
+//! A GPS message with neither `TimeUS` nor `T` is stamped with the boot time
+//! of the preceding mapped message (messages are written in time order), and
+//! a warning says so.
+//!
+//! # Robustness
+//! No input panics: all reads are bounds-checked, lengths use checked
+//! arithmetic, allocation is proportional to the input size. A bad header
+//! makes the reader scan for the next `0xA3 0x95` whose type is known and
+//! whose successor also starts with a valid header; the skipped bytes are
+//! reported in a warning. A log cut inside a message keeps everything before
+//! it and says where it was cut.
+//!
+//! # Limitations
+//! `MULT` messages are not read: `FMTU` multiplier ids are resolved with
+//! ArduPilot's fixed table, and only applied to mapped integer columns that
+//! carry no scale in their format character. Multi-instance GPS/IMU/BARO
+//! only use instance 0. Attitude is not interpolated.
+
+use std::collections::BTreeMap;
+
+use crate::logs::LogData;
+use crate::sample::Sample;
+
+const HEAD1: u8 = 0xA3;
+const HEAD2: u8 = 0x95;
+const HEADER_LEN: usize = 3;
+/// Message type of `FMT`, fixed by the format.
+const FMT_TYPE: u8 = 128;
+/// Length of an `FMT` message including its header.
+const FMT_LEN: usize = 89;
+/// Attitude older than this (s) is not put on an IMU row.
+const ATT_MAX_AGE_S: f64 = 0.5;
+/// GPA and GPS written together carry the same time stamp; tolerance, s.
+const GPA_MATCH_S: f64 = 0.0015;
+/// Keep fuzzed inputs from growing the warning list without bound.
+const MAX_WARNINGS: usize = 32;
+
+/// True when the bytes look like a DataFlash log: they start with the
+/// `0xA3 0x95` header of an `FMT` message (type 128).
+pub fn is_dataflash(bytes: &[u8]) -> bool {
+    matches!(bytes, [HEAD1, HEAD2, FMT_TYPE, ..])
+}
+
+/// Parse a DataFlash log into samples sorted by boot time (see the module
+/// doc for the mapping). `Err` (one line) only when no sample row can be read.
+pub fn read_dataflash(bytes: &[u8]) -> Result<LogData, String> {
+    let mut types: Vec<Option<Layout>> = (0..256).map(|_| None).collect();
+    if let Some(slot) = types.get_mut(usize::from(FMT_TYPE)) {
+        *slot = Some(Layout::fmt_builtin());
+    }
+    let mut out = Out {
+        counts: vec![0; 256],
+        ..Out::default()
+    };
+    let n = bytes.len();
+    let mut pos = 0usize;
+    while pos < n {
+        let rest = n - pos;
+        if rest < HEADER_LEN {
+            let partial_header =
+                bytes.get(pos) == Some(&HEAD1) && (rest == 1 || bytes.get(pos + 1) == Some(&HEAD2));
+            if partial_header {
+                out.warn(format!(
+                    "truncated at byte {n} in the middle of a message header (starts at byte {pos})"
+                ));
+            } else {
+                out.skip(rest);
+            }
+            break;
+        }
+        let Some(ty) = known_header(bytes, pos, &types) else {
+            let next = resync(bytes, pos + 1, &types);
+            out.skip(next - pos);
+            pos = next;
+            continue;
+        };
+        let Some(layout) = types.get(usize::from(ty)).and_then(Option::as_ref) else {
+            break; // unreachable: known_header checked it
+        };
+        let end = match pos.checked_add(layout.len) {
+            Some(e) if e <= n => e,
+            _ => {
+                out.warn(format!(
+                    "truncated at byte {n} in the middle of a {} message (starts at byte {pos}, {} bytes long)",
+                    layout.name, layout.len
+                ));
+                break;
+            }
+        };
+        let Some(msg) = bytes.get(pos..end) else {
+            break;
+        };
+        if let Some(c) = out.counts.get_mut(usize::from(ty)) {
+            *c += 1;
+        }
+        out.messages += 1;
+        match layout.kind {
+            Kind::Fmt => on_fmt(msg, &mut types, &mut out),
+            Kind::Fmtu => on_fmtu(msg, ty, &mut types),
+            Kind::Gps => out.on_gps(layout, msg),
+            Kind::Gpa => out.on_gpa(layout, msg),
+            Kind::Imu => out.on_imu(layout, msg),
+            Kind::Att => out.on_att(layout, msg),
+            Kind::Baro => out.on_baro(layout, msg),
+            Kind::Msg => out.on_msg(layout, msg),
+            Kind::Other => {}
+        }
+        pos = end;
+    }
+    out.finish(&types, n)
+}
+
+// ---------------------------------------------------------------------------
+// Message layouts
+
+/// What we do with a message type, decided from its name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Fmt,
+    Fmtu,
+    Gps,
+    Gpa,
+    Imu,
+    Att,
+    Baro,
+    Msg,
+    Other,
+}
+
+fn kind_of(name: &str) -> Kind {
+    match name {
+        "FMT" => Kind::Fmt,
+        "FMTU" => Kind::Fmtu,
+        "GPS" => Kind::Gps,
+        "GPA" => Kind::Gpa,
+        "IMU" => Kind::Imu,
+        "ATT" => Kind::Att,
+        "BARO" => Kind::Baro,
+        "MSG" => Kind::Msg,
+        _ => Kind::Other,
+    }
+}
+
+// Role indices into `Layout::roles`, per kind.
+const GPS_STATUS: usize = 0;
+const GPS_LAT: usize = 1;
+const GPS_LNG: usize = 2;
+const GPS_ALT: usize = 3;
+const GPS_NSATS: usize = 4;
+const GPS_HDOP: usize = 5;
+const GPS_SPD: usize = 6;
+const GPS_GCRS: usize = 7;
+const GPS_VZ: usize = 8;
+const GPA_HACC: usize = 0;
+const GPA_VACC: usize = 1;
+const GPA_VV: usize = 2;
+const IMU_ACCX: usize = 0;
+const IMU_GYRX: usize = 3;
+const ATT_ROLL: usize = 0;
+const ATT_PITCH: usize = 1;
+const ATT_YAW: usize = 2;
+const BARO_ALT: usize = 0;
+const MSG_TEXT: usize = 0;
+const FMTU_TYPE: usize = 0;
+const FMTU_MULTS: usize = 1;
+const MAX_ROLES: usize = 9;
+
+/// Column names (with accepted alternatives) of each role, in role order.
+fn role_names(kind: Kind) -> &'static [&'static [&'static str]] {
+    match kind {
+        Kind::Gps => &[
+            &["Status"],
+            &["Lat"],
+            &["Lng", "Lon"],
+            &["Alt"],
+            &["NSats", "NSat", "nSat"],
+            &["HDop", "HDOP"],
+            &["Spd"],
+            &["GCrs"],
+            &["VZ"],
+        ],
+        Kind::Gpa => &[&["HAcc"], &["VAcc"], &["VV"]],
+        Kind::Imu => &[
+            &["AccX"],
+            &["AccY"],
+            &["AccZ"],
+            &["GyrX"],
+            &["GyrY"],
+            &["GyrZ"],
+        ],
+        Kind::Att => &[&["Roll"], &["Pitch"], &["Yaw"]],
+        Kind::Baro => &[&["Alt"]],
+        Kind::Msg => &[&["Message"]],
+        Kind::Fmtu => &[&["FmtType"], &["MultIds"]],
+        Kind::Fmt | Kind::Other => &[],
+    }
+}
+
+/// Size in bytes of a format character's field, `None` if unknown.
+fn char_size(ch: u8) -> Option<usize> {
+    Some(match ch {
+        b'b' | b'B' | b'M' => 1,
+        b'h' | b'H' | b'c' | b'C' | b'g' => 2,
+        b'i' | b'I' | b'f' | b'e' | b'E' | b'L' | b'n' => 4,
+        b'd' | b'q' | b'Q' => 8,
+        b'N' => 16,
+        b'Z' | b'a' => 64,
+        _ => return None,
+    })
+}
+
+/// Integer characters without a built-in scale: the only ones an `FMTU`
+/// multiplier applies to (`c C e E L` already carry theirs).
+fn is_unscaled_int(ch: u8) -> bool {
+    matches!(ch, b'b' | b'B' | b'h' | b'H' | b'i' | b'I' | b'q' | b'Q')
+}
+
+/// ArduPilot's fixed multiplier table (`AP_Logger/LogStructure.h`).
+fn mult_of(id: u8) -> Option<f64> {
+    Some(match id {
+        b'2' => 1e2,
+        b'1' => 1e1,
+        b'0' => 1.0,
+        b'A' => 1e-1,
+        b'B' => 1e-2,
+        b'C' => 1e-3,
+        b'D' => 1e-4,
+        b'E' => 1e-5,
+        b'F' => 1e-6,
+        b'G' => 1e-7,
+        b'I' => 1e-9,
+        _ => return None, // '-' none, '?' unknown, '!' '/' unit conversions
+    })
+}
+
+/// One column: byte offset in the message (header included), format char.
+#[derive(Clone, Debug, PartialEq)]
+struct Col {
+    name: String,
+    off: usize,
+    ch: u8,
+}
+
+/// A mapped column, with the extra `FMTU` multiplier (1 when none applies).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Field {
+    off: usize,
+    ch: u8,
+    col: usize,
+    mult: f64,
+}
+
+impl Field {
+    fn num(&self, msg: &[u8]) -> f64 {
+        match read_num(msg, self.off, self.ch) {
+            Some(v) if v.is_finite() => v * self.mult,
+            _ => f64::NAN,
+        }
+    }
+}
+
+/// Layout of one message type, from its `FMT`.
+#[derive(Clone, Debug)]
+struct Layout {
+    name: String,
+    /// Message length in bytes, header included (>= 3).
+    len: usize,
+    /// Every column up to the first unknown format character. The reader
+    /// only needs `roles`; the full table serves tests and future mappings.
+    #[cfg_attr(not(test), allow(dead_code))]
+    cols: Vec<Col>,
+    kind: Kind,
+    /// Boot-clock field and units per second (1e6 TimeUS, 1e3 TimeMS / T).
+    time: Option<(Field, f64)>,
+    /// Instance column `I` of newer GPS/GPA/IMU/BARO messages.
+    inst: Option<Field>,
+    roles: [Option<Field>; MAX_ROLES],
+}
+
+impl Layout {
+    /// `FMT` describes itself; we never let a log redefine it.
+    fn fmt_builtin() -> Layout {
+        let names = ["Type", "Length", "Name", "Format", "Columns"];
+        let chars = b"BBnNZ";
+        let mut cols = Vec::with_capacity(names.len());
+        let mut off = HEADER_LEN;
+        for (name, &ch) in names.iter().zip(chars.iter()) {
+            cols.push(Col {
+                name: (*name).to_string(),
+                off,
+                ch,
+            });
+            off += char_size(ch).unwrap_or(0);
+        }
+        Layout {
+            name: "FMT".to_string(),
+            len: FMT_LEN,
+            cols,
+            kind: Kind::Fmt,
+            time: None,
+            inst: None,
+            roles: [None; MAX_ROLES],
+        }
+    }
+
+    /// Build a layout from an `FMT` message (header included). Returns the
+    /// defined type, the layout and a warning, or `None` if unusable.
+    fn from_fmt(msg: &[u8]) -> Option<(u8, Layout, Option<String>)> {
+        let ty = *msg.get(3)?;
+        let len = usize::from(*msg.get(4)?);
+        if len < HEADER_LEN {
+            return None; // could not even be skipped
+        }
+        let name = cstr(msg.get(5..9)?);
+        let format = msg.get(9..25)?.split(|&b| b == 0).next().unwrap_or(&[]);
+        let columns = cstr(msg.get(25..89)?);
+        let mut names = columns.split(',');
+        let mut cols = Vec::with_capacity(format.len());
+        let mut off = HEADER_LEN;
+        let mut warning = None;
+        for &ch in format {
+            let Some(size) = char_size(ch) else {
+                warning = Some(format!(
+                    "{name}: unknown format character {:?}; its later columns are not read",
+                    char::from(ch)
+                ));
+                break;
+            };
+            let col = names.next().unwrap_or("").trim().to_string();
+            cols.push(Col { name: col, off, ch });
+            off = off.checked_add(size)?;
+        }
+        if warning.is_none() && off != len {
+            warning = Some(format!(
+                "{name}: FMT says {len} bytes but format {:?} needs {off}; fields beyond the length are not read",
+                String::from_utf8_lossy(format)
+            ));
+        }
+        let kind = kind_of(&name);
+        let find = |label: &str| -> Option<Field> {
+            let (i, c) = cols.iter().enumerate().find(|(_, c)| c.name == label)?;
+            let end = c.off.checked_add(char_size(c.ch)?)?;
+            (end <= len).then_some(Field {
+                off: c.off,
+                ch: c.ch,
+                col: i,
+                mult: 1.0,
+            })
+        };
+        // Old GPS messages: TimeMS is GPS time of week, T is the boot clock.
+        let time = match (find("TimeUS"), kind) {
+            (Some(f), _) => Some((f, 1e6)),
+            (None, Kind::Gps) => find("T").map(|f| (f, 1e3)),
+            (None, _) => find("TimeMS").map(|f| (f, 1e3)),
+        };
+        let inst = match kind {
+            Kind::Gps | Kind::Gpa | Kind::Imu | Kind::Baro => find("I"),
+            _ => None,
+        };
+        let mut roles = [None; MAX_ROLES];
+        for (slot, alts) in roles.iter_mut().zip(role_names(kind)) {
+            *slot = alts.iter().find_map(|a| find(a));
+        }
+        let layout = Layout {
+            name,
+            len,
+            cols,
+            kind,
+            time,
+            inst,
+            roles,
+        };
+        Some((ty, layout, warning))
+    }
+
+    fn role(&self, i: usize) -> Option<&Field> {
+        self.roles.get(i).and_then(Option::as_ref)
+    }
+
+    /// Numeric value of a role, NaN if absent or not finite.
+    fn num(&self, msg: &[u8], role: usize) -> f64 {
+        self.role(role).map_or(f64::NAN, |f| f.num(msg))
+    }
+
+    /// True unless the message carries an instance number other than 0.
+    fn instance0(&self, msg: &[u8]) -> bool {
+        self.inst
+            .is_none_or(|f| read_num(msg, f.off, f.ch) == Some(0.0))
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Field decoding
+
+fn arr<const N: usize>(msg: &[u8], off: usize) -> Option<[u8; N]> {
+    msg.get(off..off.checked_add(N)?)?.try_into().ok()
+}
+
+/// Decode a numeric field at byte `off` with format character `ch`, scaled
+/// as the character says. `None` for strings, arrays, unknown characters
+/// and reads past the end.
+fn read_num(msg: &[u8], off: usize, ch: u8) -> Option<f64> {
+    Some(match ch {
+        b'b' => f64::from(i8::from_le_bytes(arr(msg, off)?)),
+        b'B' | b'M' => f64::from(u8::from_le_bytes(arr(msg, off)?)),
+        b'h' => f64::from(i16::from_le_bytes(arr(msg, off)?)),
+        b'H' => f64::from(u16::from_le_bytes(arr(msg, off)?)),
+        b'i' => f64::from(i32::from_le_bytes(arr(msg, off)?)),
+        b'I' => f64::from(u32::from_le_bytes(arr(msg, off)?)),
+        b'q' => i64::from_le_bytes(arr(msg, off)?) as f64,
+        b'Q' => u64::from_le_bytes(arr(msg, off)?) as f64,
+        b'f' => f64::from(f32::from_le_bytes(arr(msg, off)?)),
+        b'd' => f64::from_le_bytes(arr(msg, off)?),
+        b'g' => f16_to_f64(u16::from_le_bytes(arr(msg, off)?)),
+        // Dividing (not multiplying by 0.01 / 1e-7) gives the nearest double.
+        b'c' => f64::from(i16::from_le_bytes(arr(msg, off)?)) / 100.0,
+        b'C' => f64::from(u16::from_le_bytes(arr(msg, off)?)) / 100.0,
+        b'e' => f64::from(i32::from_le_bytes(arr(msg, off)?)) / 100.0,
+        b'E' => f64::from(u32::from_le_bytes(arr(msg, off)?)) / 100.0,
+        b'L' => f64::from(i32::from_le_bytes(arr(msg, off)?)) / 1e7,
+        _ => return None,
+    })
+}
+
+/// Decode a text field (`n`, `N`, `Z`): up to the first NUL, lossy UTF-8.
+fn read_str(msg: &[u8], off: usize, ch: u8) -> Option<String> {
+    match ch {
+        b'n' | b'N' | b'Z' => Some(cstr(msg.get(off..off.checked_add(char_size(ch)?)?)?)),
+        _ => None,
+    }
+}
+
+/// Decode an `a` field: 32 little-endian i16 (no mapped column uses it yet).
+#[cfg_attr(not(test), allow(dead_code))]
+fn read_i16_array(msg: &[u8], off: usize) -> Option<[i16; 32]> {
+    let raw: [u8; 64] = arr(msg, off)?;
+    let mut out = [0i16; 32];
+    for (o, pair) in out.iter_mut().zip(raw.chunks_exact(2)) {
+        if let [a, b] = pair {
+            *o = i16::from_le_bytes([*a, *b]);
+        }
+    }
+    Some(out)
+}
+
+fn cstr(b: &[u8]) -> String {
+    let end = b.iter().position(|&c| c == 0).unwrap_or(b.len());
+    String::from_utf8_lossy(b.get(..end).unwrap_or(b)).into_owned()
+}
+
+/// IEEE 754 half precision to f64 (format character `g`).
+fn f16_to_f64(h: u16) -> f64 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = i32::from((h >> 10) & 0x1f);
+    let frac = f64::from(h & 0x3ff);
+    match exp {
+        0 => sign * frac * 2f64.powi(-24),
+        31 if frac == 0.0 => sign * f64::INFINITY,
+        31 => f64::NAN,
+        e => sign * (1.0 + frac / 1024.0) * 2f64.powi(e - 15),
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Framing
+
+/// Type of a valid header at `pos` whose type has a layout.
+fn known_header(bytes: &[u8], pos: usize, types: &[Option<Layout>]) -> Option<u8> {
+    match bytes.get(pos..pos.checked_add(HEADER_LEN)?)? {
+        [HEAD1, HEAD2, ty] if types.get(usize::from(*ty)).is_some_and(Option::is_some) => Some(*ty),
+        _ => None,
+    }
+}
+
+/// Position of the next plausible message at or after `from`, or the input
+/// length. A candidate needs a known type and, unless it reaches the end,
+/// a valid header right after it: `0xA3 0x95` also occurs inside payloads.
+/// Scanning only moves forward, so resyncing is linear in the input size.
+fn resync(bytes: &[u8], from: usize, types: &[Option<Layout>]) -> usize {
+    let n = bytes.len();
+    let mut p = from;
+    while p < n {
+        let Some(i) = bytes
+            .get(p..)
+            .and_then(|s| s.windows(2).position(|w| w == [HEAD1, HEAD2]))
+        else {
+            return n;
+        };
+        let c = p + i;
+        if let Some(ty) = known_header(bytes, c, types) {
+            let len = types
+                .get(usize::from(ty))
+                .and_then(Option::as_ref)
+                .map_or(0, |l| l.len);
+            match c.checked_add(len) {
+                // Reaches the end: accept, truncation is reported later.
+                Some(next) if next.saturating_add(HEADER_LEN) > n => return c,
+                Some(next) if known_header(bytes, next, types).is_some() => return c,
+                _ => {}
+            }
+        }
+        p = c + 1;
+    }
+    n
+}
+
+fn on_fmt(msg: &[u8], types: &mut [Option<Layout>], out: &mut Out) {
+    let Some((ty, layout, warning)) = Layout::from_fmt(msg) else {
+        out.warn_once("an FMT message with a length below 3 bytes was ignored".to_string());
+        return;
+    };
+    if ty == FMT_TYPE {
+        return; // FMT's own definition is fixed by the format
+    }
+    if let Some(w) = warning {
+        out.warn_once(w);
+    }
+    let Some(slot) = types.get_mut(usize::from(ty)) else {
+        return;
+    };
+    if let Some(old) = slot.as_ref() {
+        if old.name != layout.name {
+            out.flush_count(ty, &old.name);
+        }
+    }
+    *slot = Some(layout);
+}
+
+fn on_fmtu(msg: &[u8], fmtu_ty: u8, types: &mut [Option<Layout>]) {
+    let (target, mults) = {
+        let Some(l) = types.get(usize::from(fmtu_ty)).and_then(Option::as_ref) else {
+            return;
+        };
+        let (Some(tf), Some(mf)) = (l.role(FMTU_TYPE), l.role(FMTU_MULTS)) else {
+            return;
+        };
+        let Some(target) = read_num(msg, tf.off, tf.ch) else {
+            return;
+        };
+        let Some(mults) = read_str(msg, mf.off, mf.ch) else {
+            return;
+        };
+        (target, mults)
+    };
+    if !(0.0..=255.0).contains(&target) || target as u8 == FMT_TYPE {
+        return;
+    }
+    let Some(layout) = types.get_mut(target as usize).and_then(Option::as_mut) else {
+        return;
+    };
+    let ids = mults.as_bytes();
+    for f in layout.roles.iter_mut().flatten() {
+        if is_unscaled_int(f.ch) {
+            if let Some(m) = ids.get(f.col).copied().and_then(mult_of) {
+                f.mult = m;
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Output
+
+#[derive(Default)]
+struct Out {
+    samples: Vec<Sample>,
+    /// (t, quaternion) of every ATT message.
+    att: Vec<(f64, [f64; 4])>,
+    /// Indices into `samples` of IMU rows, to receive attitude.
+    imu_rows: Vec<usize>,
+    /// Index and time of the last GPS row, for its GPA companion.
+    last_gps: Option<(usize, f64)>,
+    /// Boot time of the last mapped message, for GPS without a boot clock.
+    last_boot_t: Option<f64>,
+    counts_by_name: BTreeMap<String, u64>,
+    counts: Vec<u64>,
+    messages: u64,
+    n_gps: u64,
+    n_imu: u64,
+    n_baro: u64,
+    used_us: bool,
+    used_ms: bool,
+    firmware: Option<String>,
+    warnings: Vec<String>,
+    suppressed: usize,
+    skipped: usize,
+    skip_runs: usize,
+}
+
+impl Out {
+    fn warn(&mut self, w: String) {
+        if self.warnings.len() < MAX_WARNINGS {
+            self.warnings.push(w);
+        } else {
+            self.suppressed += 1;
+        }
+    }
+
+    fn warn_once(&mut self, w: String) {
+        if !self.warnings.contains(&w) {
+            self.warn(w);
+        }
+    }
+
+    fn skip(&mut self, n: usize) {
+        if n > 0 {
+            self.skipped = self.skipped.saturating_add(n);
+            self.skip_runs += 1;
+        }
+    }
+
+    fn flush_count(&mut self, ty: u8, name: &str) {
+        if let Some(c) = self.counts.get_mut(usize::from(ty)) {
+            if *c > 0 {
+                *self.counts_by_name.entry(name.to_string()).or_default() += *c;
+                *c = 0;
+            }
+        }
+    }
+
+    /// Boot time (s) of a message, from its layout's time column.
+    fn time(&mut self, l: &Layout, msg: &[u8]) -> Option<f64> {
+        let (f, per_s) = l.time?;
+        // Division gives the nearest double (900000 us -> exactly 0.9 s).
+        let t = read_num(msg, f.off, f.ch)? / per_s;
+        if !t.is_finite() {
+            return None;
+        }
+        if per_s > 1e4 {
+            self.used_us = true;
+        } else {
+            self.used_ms = true;
+        }
+        self.last_boot_t = Some(t);
+        Some(t)
+    }
+
+    fn time_or_warn(&mut self, l: &Layout, msg: &[u8]) -> Option<f64> {
+        let t = self.time(l, msg);
+        if t.is_none() && l.time.is_none() {
+            self.warn_once(format!(
+                "{} messages have no TimeUS/TimeMS column; ignored",
+                l.name
+            ));
+        }
+        t
+    }
+
+    fn on_gps(&mut self, l: &Layout, msg: &[u8]) {
+        if !l.instance0(msg) {
+            return;
+        }
+        let t = if l.time.is_some() {
+            self.time(l, msg)
+        } else {
+            self.warn_once(
+                "GPS messages have no boot-time column (TimeMS there is GPS time of week); \
+                 stamped with the preceding message's boot time"
+                    .to_string(),
+            );
+            self.last_boot_t
+        };
+        let Some(t) = t else { return };
+        let mut s = Sample::at(t);
+        let status = l.num(msg, GPS_STATUS);
+        s.fix = status;
+        s.sats = l.num(msg, GPS_NSATS);
+        if status.is_nan() || status >= 2.0 {
+            let (lat, lon) = (l.num(msg, GPS_LAT), l.num(msg, GPS_LNG));
+            // 0/0 is what the autopilot writes when it has no position.
+            let valid = lat.abs() <= 90.0 && lon.abs() <= 180.0 && (lat != 0.0 || lon != 0.0);
+            if valid {
+                s.lat = lat;
+                s.lon = lon;
+                s.alt = l.num(msg, GPS_ALT);
+            }
+            let (spd, crs) = (l.num(msg, GPS_SPD), l.num(msg, GPS_GCRS).to_radians());
+            s.vn = spd * crs.cos();
+            s.ve = spd * crs.sin();
+            s.vd = l.num(msg, GPS_VZ);
+            let hdop = l.num(msg, GPS_HDOP);
+            if hdop > 0.0 {
+                s.eph = hdop; // HDop x 1 m user range error, see module doc
+            }
+        }
+        self.last_gps = Some((self.samples.len(), t));
+        self.n_gps += 1;
+        self.samples.push(s);
+    }
+
+    fn on_gpa(&mut self, l: &Layout, msg: &[u8]) {
+        if !l.instance0(msg) {
+            return;
+        }
+        let Some(t) = self.time(l, msg) else { return };
+        let Some((i, tg)) = self.last_gps else { return };
+        if (t - tg).abs() > GPA_MATCH_S {
+            return;
+        }
+        let Some(s) = self.samples.get_mut(i) else {
+            return;
+        };
+        if s.fix < 2.0 {
+            return;
+        }
+        let (hacc, vacc) = (l.num(msg, GPA_HACC), l.num(msg, GPA_VACC));
+        if hacc > 0.0 {
+            s.eph = hacc;
+        }
+        if vacc > 0.0 {
+            s.epv = vacc;
+        }
+        if l.num(msg, GPA_VV) == 0.0 {
+            s.vd = f64::NAN; // receiver has no vertical velocity; VZ is a filler 0
+        }
+    }
+
+    fn on_imu(&mut self, l: &Layout, msg: &[u8]) {
+        if !l.instance0(msg) {
+            return;
+        }
+        let Some(t) = self.time_or_warn(l, msg) else {
+            return;
+        };
+        let mut s = Sample::at(t);
+        s.ax = l.num(msg, IMU_ACCX);
+        s.ay = l.num(msg, IMU_ACCX + 1);
+        s.az = l.num(msg, IMU_ACCX + 2);
+        s.gx = l.num(msg, IMU_GYRX);
+        s.gy = l.num(msg, IMU_GYRX + 1);
+        s.gz = l.num(msg, IMU_GYRX + 2);
+        self.imu_rows.push(self.samples.len());
+        self.n_imu += 1;
+        self.samples.push(s);
+    }
+
+    fn on_att(&mut self, l: &Layout, msg: &[u8]) {
+        let Some(t) = self.time_or_warn(l, msg) else {
+            return;
+        };
+        let (r, p, y) = (
+            l.num(msg, ATT_ROLL),
+            l.num(msg, ATT_PITCH),
+            l.num(msg, ATT_YAW),
+        );
+        if r.is_finite() && p.is_finite() && y.is_finite() {
+            self.att.push((t, euler_deg_to_quat(r, p, y)));
+        }
+    }
+
+    fn on_baro(&mut self, l: &Layout, msg: &[u8]) {
+        if !l.instance0(msg) {
+            return;
+        }
+        let Some(t) = self.time_or_warn(l, msg) else {
+            return;
+        };
+        let mut s = Sample::at(t);
+        s.baro = l.num(msg, BARO_ALT);
+        self.n_baro += 1;
+        self.samples.push(s);
+    }
+
+    fn on_msg(&mut self, l: &Layout, msg: &[u8]) {
+        if self.firmware.is_some() {
+            return;
+        }
+        let Some(f) = l.role(MSG_TEXT) else { return };
+        let Some(text) = read_str(msg, f.off, f.ch) else {
+            return;
+        };
+        if vehicle_type(&text).is_some() {
+            self.firmware = Some(text.trim().to_string());
+        }
+    }
+
+    fn finish(mut self, types: &[Option<Layout>], n_bytes: usize) -> Result<LogData, String> {
+        for (ty, l) in types.iter().enumerate() {
+            if let (Some(l), Ok(ty)) = (l, u8::try_from(ty)) {
+                self.flush_count(ty, &l.name);
+            }
+        }
+        if self.samples.is_empty() {
+            let why = if self.messages == 0 {
+                "not a DataFlash log: no message with a 0xA3 0x95 header and a known type"
+                    .to_string()
+            } else {
+                format!(
+                    "DataFlash log has no GPS, IMU or BARO rows ({} messages in {n_bytes} bytes)",
+                    self.messages
+                )
+            };
+            let first = self
+                .warnings
+                .first()
+                .map(|w| format!("; {w}"))
+                .unwrap_or_default();
+            return Err(format!("{why}{first}"));
+        }
+
+        // Attitude onto IMU rows: newest ATT at or before the row, if fresh.
+        self.att.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut with_att = 0u64;
+        for &i in &self.imu_rows {
+            let Some(s) = self.samples.get_mut(i) else {
+                continue;
+            };
+            let k = self.att.partition_point(|a| a.0 <= s.t);
+            let Some(&(ta, q)) = k.checked_sub(1).and_then(|k| self.att.get(k)) else {
+                continue;
+            };
+            if s.t - ta <= ATT_MAX_AGE_S {
+                [s.qw, s.qx, s.qy, s.qz] = q;
+                with_att += 1;
+            }
+        }
+        // Stable: rows with equal t keep their file order.
+        self.samples.sort_by(|a, b| a.t.total_cmp(&b.t));
+
+        if self.skipped > 0 {
+            let w = format!(
+                "skipped {} unreadable bytes in {} places (resynchronised on the next 0xA3 0x95 header)",
+                self.skipped, self.skip_runs
+            );
+            self.warnings.insert(0, w);
+        }
+        if self.suppressed > 0 {
+            self.warnings
+                .push(format!("{} more warnings suppressed", self.suppressed));
+        }
+
+        let mut meta = vec![("sys_name".to_string(), "ArduPilot".to_string())];
+        if let Some(fw) = &self.firmware {
+            meta.push(("firmware".to_string(), fw.clone()));
+            if let Some(v) = vehicle_type(fw) {
+                meta.push(("vehicle_type".to_string(), v.to_string()));
+            }
+        }
+        let base = match (self.used_us, self.used_ms) {
+            (true, false) => "TimeUS",
+            (false, true) => "TimeMS",
+            _ => "TimeUS+TimeMS",
+        };
+        meta.push(("time_base".to_string(), base.to_string()));
+        let (t0, t1) = match (self.samples.first(), self.samples.last()) {
+            (Some(a), Some(b)) => (a.t, b.t),
+            _ => (0.0, 0.0),
+        };
+        meta.push(("duration".to_string(), format!("{:.3}", t1 - t0)));
+        meta.push(("messages".to_string(), self.messages.to_string()));
+
+        let mut missing = Vec::new();
+        for (name, n) in [
+            ("gps", self.n_gps),
+            ("imu", self.n_imu),
+            ("attitude", with_att),
+            ("baro", self.n_baro),
+        ] {
+            if n == 0 {
+                missing.push(name.to_string());
+            }
+        }
+
+        Ok(LogData {
+            format: "dataflash",
+            samples: self.samples,
+            meta,
+            warnings: self.warnings,
+            missing,
+            topic_counts: self.counts_by_name.into_iter().collect(),
+        })
+    }
+}
+
+/// Vehicle type from a firmware banner such as "ArduCopter V3.3-dev (c3349c61)".
+fn vehicle_type(text: &str) -> Option<&'static str> {
+    const PREFIXES: [(&str, &str); 12] = [
+        ("ArduCopter", "copter"),
+        ("APM:Copter", "copter"),
+        ("ArduHeli", "copter"),
+        ("ArduPlane", "plane"),
+        ("APM:Plane", "plane"),
+        ("ArduRover", "rover"),
+        ("APMrover2", "rover"),
+        ("APM:Rover", "rover"),
+        ("ArduSub", "sub"),
+        ("AntennaTracker", "tracker"),
+        ("ArduTracker", "tracker"),
+        ("Blimp", "blimp"),
+    ];
+    let text = text.trim_start();
+    PREFIXES
+        .iter()
+        .find(|(p, _)| text.starts_with(p))
+        .map(|(_, v)| *v)
+}
+
+/// Euler angles (deg; ZYX order: yaw about down, then pitch, then roll) to
+/// the Hamilton quaternion `[w, x, y, z]` rotating body FRD into NED.
+/// The sign is chosen with `w >= 0` so that yaw wrapping 359.9° -> 0.1°
+/// does not flip the quaternion.
+fn euler_deg_to_quat(roll: f64, pitch: f64, yaw: f64) -> [f64; 4] {
+    let (sr, cr) = (roll.to_radians() / 2.0).sin_cos();
+    let (sp, cp) = (pitch.to_radians() / 2.0).sin_cos();
+    let (sy, cy) = (yaw.to_radians() / 2.0).sin_cos();
+    let q = [
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    ];
+    if q[0] < 0.0 {
+        q.map(|v| -v)
+    } else {
+        q
+    }
+}
+
+// ---------------------------------------------------------------------------
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const LOITER: &[u8] = include_bytes!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/ardupilot/Loiter_RTL.bin"
+    ));
+    const PLANE: &[u8] = include_bytes!(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/ardupilot/truncated_plane.BIN"
+    ));
+
+    fn close(a: f64, b: f64, eps: f64) -> bool {
+        (a - b).abs() <= eps
+    }
+
+    macro_rules! assert_close {
+        ($a:expr, $b:expr, $eps:expr) => {{
+            let (a, b): (f64, f64) = ($a, $b);
+            assert!(
+                close(a, b, $eps),
+                "{} = {a} vs {} = {b} (eps {})",
+                stringify!($a),
+                stringify!($b),
+                $eps
+            );
+        }};
+    }
+
+    fn count(d: &LogData, name: &str) -> u64 {
+        d.topic_counts
+            .iter()
+            .find(|(n, _)| n == name)
+            .map_or(0, |(_, c)| *c)
+    }
+
+    fn meta<'a>(d: &'a LogData, key: &str) -> Option<&'a str> {
+        d.meta
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+
+    fn loiter() -> LogData {
+        read_dataflash(LOITER).expect("Loiter_RTL.bin parses")
+    }
+
+    // ---- Euler -> quaternion -------------------------------------------
+
+    #[test]
+    fn quaternion_hand_cases() {
+        let h = std::f64::consts::FRAC_1_SQRT_2; // cos 45° = sin 45°
+        let cases: [([f64; 3], [f64; 4]); 6] = [
+            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]),
+            ([0.0, 0.0, 90.0], [h, 0.0, 0.0, h]),
+            ([90.0, 0.0, 0.0], [h, h, 0.0, 0.0]),
+            ([0.0, 90.0, 0.0], [h, 0.0, h, 0.0]),
+            // yaw 90 then roll 90: qz(90) * qx(90) = (½, ½, ½, ½)
+            ([90.0, 0.0, 90.0], [0.5, 0.5, 0.5, 0.5]),
+            // yaw 180: (0, 0, 0, 1)
+            ([0.0, 0.0, 180.0], [0.0, 0.0, 0.0, 1.0]),
+        ];
+        for ([r, p, y], want) in cases {
+            let q = euler_deg_to_quat(r, p, y);
+            for (a, b) in q.iter().zip(want) {
+                assert_close!(*a, b, 1e-12);
+            }
+        }
+        // Yaw 359.9° is canonicalised next to yaw 0.1°, not to its negative.
+        let a = euler_deg_to_quat(0.0, 0.0, 359.9);
+        let b = euler_deg_to_quat(0.0, 0.0, 0.1);
+        assert!(a[0] > 0.99 && b[0] > 0.99);
+        assert_close!(a[3], -b[3], 1e-12);
+    }
+
+    #[test]
+    fn quaternion_rotates_body_x_to_east_at_yaw_90() {
+        // v_ned = q v_body q*; body x (forward) with yaw 90° points east.
+        let [w, x, y, z] = euler_deg_to_quat(0.0, 0.0, 90.0);
+        let r00 = 1.0 - 2.0 * (y * y + z * z);
+        let r10 = 2.0 * (x * y + w * z);
+        let r20 = 2.0 * (x * z - w * y);
+        assert_close!(r00, 0.0, 1e-12);
+        assert_close!(r10, 1.0, 1e-12);
+        assert_close!(r20, 0.0, 1e-12);
+        // Pitch up 30°: body x gets a negative down component (climbs).
+        let [w, x, y, z] = euler_deg_to_quat(0.0, 30.0, 0.0);
+        assert_close!(2.0 * (x * z - w * y), -0.5, 1e-12);
+    }
+
+    // ---- Real logs ---------------------------------------------------------
+
+    /// Counts cross-checked with pymavlink 2.4.50:
+    /// `DFReader.DFReader_binary(path).recv_msg()` until None, by get_type().
+    #[test]
+    fn loiter_counts_match_pymavlink() {
+        let d = loiter();
+        assert_eq!(d.format, "dataflash");
+        assert_eq!(count(&d, "GPS"), 992);
+        assert_eq!(count(&d, "IMU"), 11775);
+        assert_eq!(count(&d, "ATT"), 2356);
+        assert_eq!(count(&d, "BARO"), 2357);
+        assert_eq!(count(&d, "FMT"), 42);
+        assert_eq!(count(&d, "PARM"), 392);
+        assert_eq!(count(&d, "MSG"), 2);
+        assert_eq!(count(&d, "ERR"), 5);
+        let names: Vec<&str> = d.topic_counts.iter().map(|(n, _)| n.as_str()).collect();
+        let mut sorted = names.clone();
+        sorted.sort_unstable();
+        assert_eq!(names, sorted);
+        assert_eq!(d.topic_counts.len(), 25);
+        // One row per GPS, IMU and BARO message; ATT has no rows.
+        assert_eq!(d.samples.len(), 992 + 11775 + 2357);
+        assert!(d.warnings.is_empty(), "{:?}", d.warnings);
+        assert!(d.missing.is_empty(), "{:?}", d.missing);
+    }
+
+    #[test]
+    fn loiter_meta_and_time_base() {
+        let d = loiter();
+        assert_eq!(meta(&d, "firmware"), Some("ArduCopter V3.3-dev (c3349c61)"));
+        assert_eq!(meta(&d, "vehicle_type"), Some("copter"));
+        assert_eq!(meta(&d, "time_base"), Some("TimeMS"));
+        // First row: IMU at 20.664 s boot; last: IMU at 278.590 s.
+        assert_close!(d.samples[0].t, 20.664, 1e-9);
+        assert_close!(d.samples[d.samples.len() - 1].t, 278.590, 1e-9);
+        let dur: f64 = meta(&d, "duration")
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(f64::NAN);
+        assert_close!(dur, 257.926, 1e-6);
+        assert!(d.samples.windows(2).all(|w| w[0].t <= w[1].t));
+    }
+
+    #[test]
+    fn loiter_gps_uses_boot_time_t_not_time_of_week() {
+        let d = loiter();
+        let gps: Vec<&Sample> = d.samples.iter().filter(|s| s.fix.is_finite()).collect();
+        assert_eq!(gps.len(), 992);
+        // T runs 20.674 .. 277.419 s; TimeMS (GPS week ms) would be ~403369 s.
+        assert_close!(gps[0].t, 20.674, 1e-9);
+        assert_close!(gps[gps.len() - 1].t, 277.419, 1e-9);
+        // About 5.6 Hz: the median interval is 0.18 s.
+        let mut dt: Vec<f64> = gps.windows(2).map(|w| w[1].t - w[0].t).collect();
+        dt.sort_by(f64::total_cmp);
+        let median = dt[dt.len() / 2];
+        assert_close!(1.0 / median, 5.6, 0.1);
+    }
+
+    #[test]
+    fn loiter_first_fix_matches_pymavlink() {
+        let d = loiter();
+        let s = d
+            .samples
+            .iter()
+            .find(|s| s.has_fix())
+            .copied()
+            .unwrap_or_default();
+        // pymavlink: Status 3, NSats 7, HDop 2.54, Lat 42.845769,
+        // Lng -2.6885322, Alt 521.31, Spd 0.26, GCrs 330.59, VZ -0.1, T 20674.
+        assert_close!(s.t, 20.674, 1e-9);
+        assert_close!(s.fix, 3.0, 0.0);
+        assert_close!(s.sats, 7.0, 0.0);
+        assert_close!(s.lat, 42.845769, 1e-9);
+        assert_close!(s.lon, -2.6885322, 1e-9);
+        assert_close!(s.alt, 521.31, 1e-9);
+        assert_close!(s.eph, 2.54, 1e-9);
+        assert!(s.epv.is_nan());
+        assert_close!(s.vn, 0.22649331, 1e-7);
+        assert_close!(s.ve, -0.12767451, 1e-7);
+        assert_close!(s.vd, -0.1, 1e-6);
+        assert!(s.ax.is_nan() && s.baro.is_nan() && s.qw.is_nan());
+    }
+
+    #[test]
+    fn loiter_gps_outage_97_to_103_4() {
+        let d = loiter();
+        let gps = || d.samples.iter().filter(|s| s.fix.is_finite());
+        assert_eq!(
+            gps()
+                .filter(|s| s.t > 98.0 && s.t < 103.0 && s.has_fix())
+                .count(),
+            0
+        );
+        assert!(gps().any(|s| s.t > 96.0 && s.t < 96.5 && s.has_fix()));
+        assert!(gps().any(|s| s.t > 104.0 && s.t < 104.5 && s.has_fix()));
+        // The receiver reported the outage: Status 0 at 98.217, 1 at 103.399,
+        // without a position; and nothing else between 97.0 and 103.6 s.
+        let inside: Vec<&Sample> = gps().filter(|s| s.t > 97.0 && s.t < 103.6).collect();
+        assert_eq!(inside.len(), 2);
+        assert_close!(inside[0].t, 98.217, 1e-9);
+        assert_close!(inside[0].fix, 0.0, 0.0);
+        assert_close!(inside[1].t, 103.399, 1e-9);
+        assert_close!(inside[1].fix, 1.0, 0.0);
+        assert!(inside
+            .iter()
+            .all(|s| s.reports_no_fix() && !s.has_position() && !s.has_velocity()));
+        // Every other GPS row has a 3D fix.
+        assert_eq!(gps().filter(|s| s.fix == 3.0 && s.has_fix()).count(), 990);
+    }
+
+    #[test]
+    fn loiter_logging_pause_has_no_rows() {
+        // The README's 30.7-53.1 s is counted from the first IMU sample
+        // (20.664 s boot); in boot time the pause is 51.564 .. 73.788 s.
+        let d = loiter();
+        assert_eq!(
+            d.samples
+                .iter()
+                .filter(|s| s.t > 51.6 && s.t < 73.78)
+                .count(),
+            0
+        );
+        assert!(d.samples.iter().any(|s| s.t > 51.4 && s.t <= 51.6));
+        assert!(d.samples.iter().any(|s| s.t >= 73.78 && s.t < 74.0));
+        let t0 = d.samples[0].t;
+        assert_eq!(
+            d.samples
+                .iter()
+                .filter(|s| s.t - t0 > 31.0 && s.t - t0 < 53.1)
+                .count(),
+            0
+        );
+    }
+
+    #[test]
+    fn loiter_imu_and_attitude() {
+        let d = loiter();
+        let imu: Vec<&Sample> = d.samples.iter().filter(|s| s.has_accel()).collect();
+        assert_eq!(imu.len(), 11775);
+        // pymavlink first IMU: AccZ -9.757428, GyrX 0.0029209.
+        assert_close!(imu[0].az, -9.757428169250488, 1e-9);
+        assert_close!(imu[0].gx, 0.002920900471508503, 1e-12);
+        // First ATT (20.664 s, same time as that IMU row): roll 0.27, pitch 0.58, yaw 0.58 deg.
+        let q = euler_deg_to_quat(0.27, 0.58, 0.58);
+        assert_close!(imu[0].qw, q[0], 1e-12);
+        assert_close!(imu[0].qz, q[3], 1e-12);
+        // ATT is 10 Hz, so every IMU row gets an attitude at most 0.1 s old.
+        let with = imu.iter().filter(|s| s.has_attitude()).count();
+        assert_eq!(with, imu.len());
+        for s in &imu {
+            let n = s.qw * s.qw + s.qx * s.qx + s.qy * s.qy + s.qz * s.qz;
+            assert_close!(n, 1.0, 1e-12);
+            assert!(s.qw >= 0.0);
+        }
+        // No attitude on GPS or BARO rows.
+        assert!(d
+            .samples
+            .iter()
+            .filter(|s| !s.has_accel())
+            .all(|s| s.qw.is_nan()));
+        // BARO rows: 2357, first Alt 0.0439 m.
+        let baro: Vec<&Sample> = d.samples.iter().filter(|s| s.has_baro()).collect();
+        assert_eq!(baro.len(), 2357);
+        assert_close!(baro[0].baro, 0.043892595916986465, 1e-9);
+    }
+
+    #[test]
+    fn loiter_vz_is_positive_down() {
+        // Correlate VZ with the rate of change of GPS altitude (positive up).
+        let d = loiter();
+        let fixes: Vec<&Sample> = d.samples.iter().filter(|s| s.has_fix()).collect();
+        let mut pairs = Vec::new();
+        for w in fixes.windows(3) {
+            let dt = w[2].t - w[0].t;
+            if dt > 0.0 && dt < 1.0 {
+                pairs.push((w[1].vd, (w[2].alt - w[0].alt) / dt));
+            }
+        }
+        let n = pairs.len() as f64;
+        let (ma, mb) = pairs
+            .iter()
+            .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+        let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+        for (a, b) in &pairs {
+            sab += (a - ma) * (b - mb);
+            saa += (a - ma) * (a - ma);
+            sbb += (b - mb) * (b - mb);
+        }
+        let corr = sab / (saa * sbb).sqrt();
+        assert!(corr < -0.7, "corr(vd, dAlt/dt) = {corr}");
+    }
+
+    #[test]
+    fn truncated_plane_reads_partially() {
+        let d = read_dataflash(PLANE).expect("partial read is Ok");
+        assert!(
+            d.warnings
+                .iter()
+                .any(|w| w.contains("truncated at byte 65536 in the middle of a")),
+            "{:?}",
+            d.warnings
+        );
+        assert_eq!(meta(&d, "time_base"), Some("TimeUS"));
+        assert_eq!(
+            meta(&d, "firmware"),
+            Some("ArduPlane V3.8.2-dev (8178ab40)")
+        );
+        assert_eq!(meta(&d, "vehicle_type"), Some("plane"));
+        // pymavlink 2.4.50 on the same file.
+        assert_eq!(count(&d, "IMU"), 45);
+        assert_eq!(count(&d, "IMU2"), 45);
+        assert_eq!(count(&d, "GPS"), 5);
+        assert_eq!(count(&d, "ATT"), 24);
+        assert_eq!(count(&d, "BARO"), 8);
+        assert_eq!(count(&d, "FMT"), 132);
+        assert_eq!(count(&d, "PARM"), 809);
+        assert_eq!(d.samples.iter().filter(|s| s.has_accel()).count(), 45);
+        // First IMU: TimeUS 81794643, AccZ -9.780994.
+        let imu = d
+            .samples
+            .iter()
+            .find(|s| s.has_accel())
+            .copied()
+            .unwrap_or_default();
+        assert_close!(imu.t, 81.794643, 1e-9);
+        assert_close!(imu.az, -9.780994415283203, 1e-9);
+        // First GPS: TimeUS 81855471, Lat -35.3626277, Lng 149.1653034, Alt 588.82.
+        let g = d
+            .samples
+            .iter()
+            .find(|s| s.has_fix())
+            .copied()
+            .unwrap_or_default();
+        assert_close!(g.t, 81.855471, 1e-9);
+        assert_close!(g.lat, -35.3626277, 1e-9);
+        assert_close!(g.lon, 149.1653034, 1e-9);
+        assert_close!(g.alt, 588.82, 1e-9);
+        assert_close!(g.vd, 0.35, 1e-6);
+        assert!(d.missing.is_empty(), "{:?}", d.missing);
+    }
+
+    // ---- Robustness ------------------------------------------------------
+
+    /// xorshift64*: deterministic, dependency-free.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+        }
+        fn below(&mut self, n: usize) -> usize {
+            (self.next() % n.max(1) as u64) as usize
+        }
+    }
+
+    #[test]
+    fn truncation_at_many_offsets_never_panics() {
+        let head = &LOITER[..LOITER.len().min(60_000)];
+        for cut in (0..head.len()).step_by(97).chain(0..200) {
+            let _ = read_dataflash(&head[..cut]);
+        }
+        for cut in (0..PLANE.len()).step_by(61) {
+            let _ = read_dataflash(&PLANE[..cut]);
+        }
+        // A cut inside a message of the full log is reported with its offset.
+        let cut = &LOITER[..LOITER.len() - 5];
+        let d = read_dataflash(cut).expect("ok");
+        let want = format!("truncated at byte {}", cut.len());
+        assert!(
+            d.warnings.iter().any(|w| w.starts_with(&want)),
+            "{:?}",
+            d.warnings
+        );
+    }
+
+    #[test]
+    fn random_byte_flips_never_panic() {
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+        let base = &LOITER[..LOITER.len().min(40_000)];
+        for round in 0..150 {
+            let mut buf = if round % 2 == 0 {
+                base.to_vec()
+            } else {
+                PLANE.to_vec()
+            };
+            for _ in 0..1 + rng.below(40) {
+                let i = rng.below(buf.len());
+                if let Some(b) = buf.get_mut(i) {
+                    *b = rng.next() as u8;
+                }
+            }
+            let _ = read_dataflash(&buf);
+        }
+        // Pure noise, and noise seeded with headers.
+        for _ in 0..30 {
+            let mut buf: Vec<u8> = (0..4000).map(|_| rng.next() as u8).collect();
+            for _ in 0..200 {
+                let i = rng.below(buf.len() - 3);
+                buf[i] = HEAD1;
+                buf[i + 1] = HEAD2;
+                buf[i + 2] = if rng.below(2) == 0 {
+                    FMT_TYPE
+                } else {
+                    rng.next() as u8
+                };
+            }
+            let _ = read_dataflash(&buf);
+        }
+    }
+
+    /// Message start offsets, walking the lengths declared by FMT.
+    fn boundaries(bytes: &[u8]) -> Vec<usize> {
+        let mut lens = [0usize; 256];
+        lens[usize::from(FMT_TYPE)] = FMT_LEN;
+        let (mut out, mut pos) = (Vec::new(), 0);
+        while pos + HEADER_LEN <= bytes.len() {
+            let ty = bytes[pos + 2];
+            let l = lens[usize::from(ty)];
+            if l == 0 || pos + l > bytes.len() {
+                break;
+            }
+            if ty == FMT_TYPE {
+                if let Some((t, lay, _)) = Layout::from_fmt(&bytes[pos..]) {
+                    lens[usize::from(t)] = lay.len;
+                }
+            }
+            out.push(pos);
+            pos += l;
+        }
+        out
+    }
+
+    #[test]
+    fn resyncs_over_garbage_and_counts_it() {
+        let d0 = loiter();
+        let total = |d: &LogData| d.topic_counts.iter().map(|(_, c)| c).sum::<u64>();
+        let b = boundaries(LOITER);
+        assert_eq!(b.len() as u64, total(&d0)); // the walk agrees with the reader
+                                                // 1000 bytes of noise (no 0xA3 in it) inserted at a message boundary.
+        let at = b[b.len() / 3];
+        let mut rng = Rng(7);
+        let mut buf = LOITER[..at].to_vec();
+        buf.extend((0..1000).map(|_| (rng.next() as u8) & 0x7f));
+        buf.extend_from_slice(&LOITER[at..]);
+        let d = read_dataflash(&buf).expect("ok");
+        assert_eq!(
+            d.warnings,
+            vec!["skipped 1000 unreadable bytes in 1 places (resynchronised on the next 0xA3 0x95 header)"]
+        );
+        // Same rows bit for bit (NaN != NaN, so compare the bits).
+        let bits = |d: &LogData| -> Vec<u64> {
+            d.samples
+                .iter()
+                .flat_map(|s| (0..26).map(move |i| s.get(i).to_bits()))
+                .collect()
+        };
+        assert_eq!(d.samples.len(), d0.samples.len());
+        assert!(bits(&d) == bits(&d0));
+        // A broken header costs exactly that message.
+        let mut buf = LOITER.to_vec();
+        buf[b[b.len() / 2]] = 0;
+        let d = read_dataflash(&buf).expect("ok");
+        assert!(
+            d.warnings.iter().any(|w| w.starts_with("skipped")),
+            "{:?}",
+            d.warnings
+        );
+        assert_eq!(total(&d) + 1, total(&d0));
+    }
+
+    #[test]
+    fn detection_and_errors() {
+        assert!(is_dataflash(LOITER));
+        assert!(is_dataflash(PLANE));
+        assert!(!is_dataflash(b""));
+        assert!(!is_dataflash(&[0xA3, 0x95]));
+        assert!(!is_dataflash(b"ULog\x01\x12\x35"));
+        assert!(read_dataflash(b"").is_err());
+        assert!(read_dataflash(b"t,lat,lon\n0,1,2\n").is_err());
+        // FMT messages only: readable but nothing usable.
+        let e = read_dataflash(&LOITER[..FMT_LEN * 3])
+            .err()
+            .unwrap_or_default();
+        assert!(e.contains("no GPS, IMU or BARO rows"), "{e}");
+        assert!(!e.contains('\n'));
+    }
+
+    // ---- Synthetic logs ----------------------------------------------------
+
+    fn fmt_msg(ty: u8, len: u8, name: &str, format: &str, columns: &str) -> Vec<u8> {
+        let mut m = vec![HEAD1, HEAD2, FMT_TYPE, ty, len];
+        let mut put = |s: &str, n: usize| {
+            let mut b = s.as_bytes().to_vec();
+            b.resize(n, 0);
+            m.extend_from_slice(&b);
+        };
+        put(name, 4);
+        put(format, 16);
+        put(columns, 64);
+        assert_eq!(m.len(), FMT_LEN);
+        m
+    }
+
+    fn layout_of(fmt: &[u8]) -> Layout {
+        Layout::from_fmt(fmt).map(|(_, l, _)| l).expect("layout")
+    }
+
+    fn col<'a>(l: &'a Layout, name: &str) -> &'a Col {
+        l.cols.iter().find(|c| c.name == name).expect("column")
+    }
+
+    #[test]
+    fn every_format_char_decodes() {
+        // Two types (16 format characters at most per FMT).
+        let f1 = fmt_msg(
+            10,
+            3 + 1 + 1 + 2 + 2 + 4 + 4 + 4 + 8 + 2 + 2 + 4 + 4 + 4 + 1 + 8 + 8,
+            "NUM",
+            "bBhHiIfdcCeELMqQ",
+            "b,B,h,H,i,I,f,d,c,C,e,E,L,M,q,Q",
+        );
+        let l = layout_of(&f1);
+        assert_eq!(l.cols.len(), 16);
+        let mut m = vec![HEAD1, HEAD2, 10];
+        m.extend_from_slice(&(-5i8).to_le_bytes());
+        m.extend_from_slice(&250u8.to_le_bytes());
+        m.extend_from_slice(&(-30000i16).to_le_bytes());
+        m.extend_from_slice(&60000u16.to_le_bytes());
+        m.extend_from_slice(&(-2_000_000_000i32).to_le_bytes());
+        m.extend_from_slice(&4_000_000_000u32.to_le_bytes());
+        m.extend_from_slice(&1.5f32.to_le_bytes());
+        m.extend_from_slice(&(-2.25e100f64).to_le_bytes());
+        m.extend_from_slice(&(-1234i16).to_le_bytes()); // c: -12.34
+        m.extend_from_slice(&35999u16.to_le_bytes()); // C: 359.99
+        m.extend_from_slice(&52131i32.to_le_bytes()); // e: 521.31
+        m.extend_from_slice(&4_000_000_000u32.to_le_bytes()); // E: 4e7
+        m.extend_from_slice(&428457690i32.to_le_bytes()); // L: 42.845769
+        m.extend_from_slice(&5u8.to_le_bytes()); // M: mode 5
+        m.extend_from_slice(&(-9_000_000_000i64).to_le_bytes());
+        m.extend_from_slice(&81_794_643u64.to_le_bytes());
+        assert_eq!(m.len(), l.len);
+        let want = [
+            -5.0, 250.0, -30000.0, 60000.0, -2e9, 4e9, 1.5, -2.25e100, -12.34, 359.99, 521.31, 4e7,
+            42.845769, 5.0, -9e9, 81794643.0,
+        ];
+        for (c, w) in l.cols.iter().zip(want) {
+            assert_eq!(read_num(&m, c.off, c.ch), Some(w), "column {}", c.name);
+        }
+
+        let f2 = fmt_msg(11, 3 + 4 + 16 + 64 + 64 + 2, "TXT", "nNZag", "n,N,Z,a,g");
+        let l = layout_of(&f2);
+        let mut m = vec![HEAD1, HEAD2, 11];
+        m.extend_from_slice(b"GPS\0");
+        let mut n16 = b"SYSID_SW_MREV".to_vec();
+        n16.resize(16, 0);
+        m.extend_from_slice(&n16);
+        let mut z = b"ArduCopter V3.3-dev (c3349c61)".to_vec();
+        z.resize(64, 0);
+        m.extend_from_slice(&z);
+        for i in 0..32i16 {
+            m.extend_from_slice(&(i * 1000 - 16000).to_le_bytes());
+        }
+        m.extend_from_slice(&0x3E00u16.to_le_bytes()); // half 1.5
+        assert_eq!(m.len(), l.len);
+        assert_eq!(read_str(&m, col(&l, "n").off, b'n').as_deref(), Some("GPS"));
+        assert_eq!(
+            read_str(&m, col(&l, "N").off, b'N').as_deref(),
+            Some("SYSID_SW_MREV")
+        );
+        assert_eq!(
+            read_str(&m, col(&l, "Z").off, b'Z').as_deref(),
+            Some("ArduCopter V3.3-dev (c3349c61)")
+        );
+        let a = read_i16_array(&m, col(&l, "a").off).unwrap_or([0; 32]);
+        assert_eq!((a[0], a[31]), (-16000, 15000));
+        assert_eq!(read_num(&m, col(&l, "a").off, b'a'), None);
+        assert_eq!(read_num(&m, col(&l, "g").off, b'g'), Some(1.5));
+        assert_eq!(f16_to_f64(0xC000), -2.0);
+        assert_eq!(f16_to_f64(0x0001), 2f64.powi(-24));
+        assert!(f16_to_f64(0x7C00).is_infinite() && f16_to_f64(0x7E00).is_nan());
+        // Reads past the message end are refused, never panic.
+        assert_eq!(read_num(&m[..10], 8, b'i'), None);
+        assert_eq!(read_str(&m, usize::MAX - 2, b'Z'), None);
+        assert_eq!(read_num(&m, usize::MAX, b'Q'), None);
+    }
+
+    #[test]
+    fn fmt_edge_cases() {
+        // Unknown char: later columns dropped, a warning.
+        let (_, l, w) = Layout::from_fmt(&fmt_msg(12, 9, "ODD", "IxB", "T,X,B")).expect("parsed");
+        assert_eq!(l.cols.len(), 1);
+        assert!(w.unwrap_or_default().contains("unknown format character"));
+        // Length disagreeing with the format: fields past the length unmapped.
+        let (_, l, w) = Layout::from_fmt(&fmt_msg(
+            13,
+            9,
+            "IMU",
+            "Iffffff",
+            "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ",
+        ))
+        .expect("parsed");
+        assert!(w.unwrap_or_default().contains("needs 31"));
+        assert!(l.time.is_some() && l.role(IMU_ACCX).is_none());
+        // Length below a header: unusable.
+        assert!(Layout::from_fmt(&fmt_msg(14, 2, "BAD", "", "")).is_none());
+        // GPS: T, not TimeMS, is the clock; IMU: TimeMS is.
+        let l = layout_of(&fmt_msg(
+            130,
+            45,
+            "GPS",
+            "BIHBcLLeeEefI",
+            "Status,TimeMS,Week,NSats,HDop,Lat,Lng,RelAlt,Alt,Spd,GCrs,VZ,T",
+        ));
+        assert_eq!(l.time.map(|(f, u)| (f.off, u)), Some((41, 1e3)));
+    }
+
+    /// A synthetic TimeUS-era log: GPS + GPA with instances, IMU instances,
+    /// ATT, BARO, FMTU, a no-fix GPS and a message cut at the end.
+    #[test]
+    fn synthetic_timeus_log() {
+        let mut log = Vec::new();
+        log.extend(fmt_msg(
+            130,
+            3 + 8 + 1 + 1 + 4 + 2 + 1 + 2 + 4 + 4 + 4 + 4 + 4 + 4 + 4 + 1,
+            "GPS",
+            "QBBIHBcLLeffffB",
+            "TimeUS,I,Status,GMS,GWk,NSats,HDop,Lat,Lng,Alt,Spd,GCrs,VZ,Yaw,U",
+        ));
+        log.extend(fmt_msg(
+            131,
+            3 + 8 + 1 + 2 + 2 + 2 + 2 + 4 + 1 + 4 + 2,
+            "GPA",
+            "QBCCCCfBIH",
+            "TimeUS,I,VDop,HAcc,VAcc,SAcc,YAcc,VV,SMS,Delta",
+        ));
+        log.extend(fmt_msg(
+            132,
+            3 + 8 + 1 + 24,
+            "IMU",
+            "QBffffff",
+            "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ",
+        ));
+        log.extend(fmt_msg(
+            133,
+            3 + 8 + 8,
+            "ATT",
+            "Qcccc",
+            "TimeUS,DesRoll,Roll,DesPitch,Pitch",
+        ));
+        log.extend(fmt_msg(134, 3 + 8 + 1 + 4, "BARO", "QBi", "TimeUS,I,Alt"));
+        log.extend(fmt_msg(
+            135,
+            3 + 8 + 1 + 16 + 16,
+            "FMTU",
+            "QBNN",
+            "TimeUS,FmtType,UnitIds,MultIds",
+        ));
+        log.extend(fmt_msg(
+            136,
+            3 + 8 + 8 + 4,
+            "ATT",
+            "QcccccC",
+            "TimeUS,DesRoll,Roll,DesPitch,Pitch,DesYaw,Yaw",
+        ));
+        // FMTU: BARO Alt is an int32 in cm ('B' = 1e-2).
+        let mut u = vec![HEAD1, HEAD2, 135];
+        u.extend_from_slice(&0u64.to_le_bytes());
+        u.push(134);
+        u.extend_from_slice(b"s#m\0\0\0\0\0\0\0\0\0\0\0\0\0");
+        u.extend_from_slice(b"F-B\0\0\0\0\0\0\0\0\0\0\0\0\0");
+        log.extend(u);
+        let gps = |t_us: u64, inst: u8, status: u8, lat: i32| {
+            let mut m = vec![HEAD1, HEAD2, 130];
+            m.extend_from_slice(&t_us.to_le_bytes());
+            m.push(inst);
+            m.push(status);
+            m.extend_from_slice(&123_456u32.to_le_bytes());
+            m.extend_from_slice(&2000u16.to_le_bytes());
+            m.push(12);
+            m.extend_from_slice(&77u16.to_le_bytes()); // HDop 0.77
+            m.extend_from_slice(&lat.to_le_bytes());
+            m.extend_from_slice(&1_491_653_034i32.to_le_bytes());
+            m.extend_from_slice(&58_882i32.to_le_bytes());
+            m.extend_from_slice(&2.0f32.to_le_bytes()); // Spd
+            m.extend_from_slice(&90.0f32.to_le_bytes()); // GCrs: east
+            m.extend_from_slice(&(-0.5f32).to_le_bytes()); // VZ: climbing
+            m.extend_from_slice(&0.0f32.to_le_bytes());
+            m.push(1);
+            m
+        };
+        let imu = |t_us: u64, inst: u8, az: f32| {
+            let mut m = vec![HEAD1, HEAD2, 132];
+            m.extend_from_slice(&t_us.to_le_bytes());
+            m.push(inst);
+            for v in [0.01f32, 0.02, 0.03, 0.1, 0.2, az] {
+                m.extend_from_slice(&v.to_le_bytes());
+            }
+            m
+        };
+        // ATT redefined with type 136 (Yaw present); 133 stays a second ATT type.
+        let mut att = vec![HEAD1, HEAD2, 136];
+        att.extend_from_slice(&1_000_000u64.to_le_bytes());
+        for v in [0i16, 0, 0, 0, 0] {
+            att.extend_from_slice(&v.to_le_bytes());
+        }
+        att.extend_from_slice(&9000u16.to_le_bytes()); // yaw 90°
+        log.extend(att);
+        log.extend(imu(1_000_000, 0, -9.8));
+        log.extend(imu(1_000_000, 1, -9.7)); // instance 1: ignored
+        log.extend(imu(1_600_000, 0, -9.81)); // attitude 0.6 s old: none
+        log.extend(gps(1_100_000, 0, 3, -353_626_277));
+        let mut gpa = vec![HEAD1, HEAD2, 131];
+        gpa.extend_from_slice(&1_100_000u64.to_le_bytes());
+        gpa.push(0);
+        for v in [120u16, 150, 230, 40] {
+            gpa.extend_from_slice(&v.to_le_bytes());
+        }
+        gpa.extend_from_slice(&0.0f32.to_le_bytes());
+        gpa.push(1);
+        gpa.extend_from_slice(&1100u32.to_le_bytes());
+        gpa.extend_from_slice(&200u16.to_le_bytes());
+        log.extend(gpa);
+        log.extend(gps(1_100_000, 1, 3, -353_626_277)); // instance 1: ignored
+        log.extend(gps(1_300_000, 0, 1, 0)); // no fix
+        let mut baro = vec![HEAD1, HEAD2, 134];
+        baro.extend_from_slice(&900_000u64.to_le_bytes());
+        baro.push(0);
+        baro.extend_from_slice(&1234i32.to_le_bytes());
+        log.extend(baro);
+        let full = log.len();
+        log.extend(&imu(2_000_000, 0, -9.8)[..10]); // cut
+
+        assert!(is_dataflash(&log));
+        let d = read_dataflash(&log).expect("ok");
+        assert_eq!(meta(&d, "time_base"), Some("TimeUS"));
+        assert_eq!(
+            d.warnings,
+            vec![format!(
+                "truncated at byte {} in the middle of a IMU message (starts at byte {full}, 36 bytes long)",
+                log.len()
+            )]
+        );
+        assert!(d.missing.is_empty(), "{:?}", d.missing);
+        let t: Vec<f64> = d.samples.iter().map(|s| s.t).collect();
+        assert_eq!(t, vec![0.9, 1.0, 1.1, 1.3, 1.6]);
+        let [b, i0, g, nf, i1] = [0, 1, 2, 3, 4].map(|i| d.samples[i]);
+        assert_close!(b.baro, 12.34, 1e-12); // FMTU multiplier applied
+        assert_close!(i0.az, -9.8f32 as f64, 0.0);
+        assert_close!(i0.qw, std::f64::consts::FRAC_1_SQRT_2, 1e-12);
+        assert_close!(i0.qz, std::f64::consts::FRAC_1_SQRT_2, 1e-12);
+        assert!(!i1.has_attitude());
+        assert_close!(g.lat, -35.3626277, 1e-12);
+        assert_close!(g.lon, 149.1653034, 1e-12);
+        assert_close!(g.alt, 588.82, 1e-12);
+        assert_close!(g.vn, 0.0, 1e-12);
+        assert_close!(g.ve, 2.0, 1e-12);
+        assert_close!(g.vd, -0.5, 0.0);
+        assert_close!(g.eph, 1.5, 1e-12); // GPA HAcc wins over HDop
+        assert_close!(g.epv, 2.3, 1e-12);
+        assert_close!(g.sats, 12.0, 0.0);
+        assert_close!(nf.fix, 1.0, 0.0);
+        assert!(nf.reports_no_fix() && !nf.has_position() && !nf.has_velocity() && nf.eph.is_nan());
+        assert_eq!(count(&d, "ATT"), 1);
+        assert_eq!(count(&d, "IMU"), 3);
+        assert_eq!(count(&d, "GPS"), 3);
+    }
+
+    /// Old (TimeMS-era) GPS without `T`: stamped from the preceding message.
+    #[test]
+    fn old_gps_without_boot_clock_uses_preceding_time() {
+        let mut log = Vec::new();
+        log.extend(fmt_msg(1, 3 + 4 + 4, "BARO", "If", "TimeMS,Alt"));
+        log.extend(fmt_msg(
+            2,
+            3 + 1 + 4 + 1 + 4 + 4,
+            "GPS",
+            "BIBLL",
+            "Status,TimeMS,NSats,Lat,Lng",
+        ));
+        let mut m = vec![HEAD1, HEAD2, 1];
+        m.extend_from_slice(&5000u32.to_le_bytes());
+        m.extend_from_slice(&3.5f32.to_le_bytes());
+        log.extend(m);
+        let mut m = vec![HEAD1, HEAD2, 2, 3];
+        m.extend_from_slice(&400_000_000u32.to_le_bytes());
+        m.push(9);
+        m.extend_from_slice(&100_000_000i32.to_le_bytes());
+        m.extend_from_slice(&200_000_000i32.to_le_bytes());
+        log.extend(m);
+        let d = read_dataflash(&log).expect("ok");
+        assert_eq!(meta(&d, "time_base"), Some("TimeMS"));
+        assert_eq!(d.samples.len(), 2);
+        assert_close!(d.samples[1].t, 5.0, 0.0);
+        assert_close!(d.samples[1].lat, 10.0, 0.0);
+        assert!(d.samples[1].alt.is_nan());
+        assert!(d.warnings.iter().any(|w| w.contains("time of week")));
+        assert_eq!(d.missing, vec!["imu".to_string(), "attitude".to_string()]);
+    }
+
+    /// Parse throughput; run with
+    /// `cargo test --release -- --ignored --nocapture throughput`.
+    #[test]
+    #[ignore]
+    fn throughput() {
+        let reps = 50;
+        let start = std::time::Instant::now();
+        let mut rows = 0;
+        for _ in 0..reps {
+            rows += read_dataflash(std::hint::black_box(LOITER)).map_or(0, |d| d.samples.len());
+        }
+        let s = start.elapsed().as_secs_f64();
+        let mb = (LOITER.len() * reps) as f64 / 1e6;
+        println!(
+            "throughput: {:.1} MB/s ({rows} rows, {:.2} ms per parse)",
+            mb / s,
+            s * 1e3 / reps as f64
+        );
+    }
+}

@@ -1,0 +1,141 @@
+//! One row of a navigation log: the contract's navlog CSV columns (§1).
+//!
+//! Every field is `f64` and `NaN` means "absent in this row", the same
+//! convention as the columnar JS API, so a row costs no allocation.
+
+/// A navlog row. Units follow the contract: s, deg, m, m/s, m/s², rad/s.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time, s (required, non-decreasing).
+    pub t: f64,
+    /// GPS fix, WGS-84 deg / deg / m AMSL.
+    pub lat: f64,
+    pub lon: f64,
+    pub alt: f64,
+    /// GPS fix already in a local NED frame, m.
+    pub pn: f64,
+    pub pe: f64,
+    pub pd: f64,
+    /// GPS velocity NED, m/s.
+    pub vn: f64,
+    pub ve: f64,
+    pub vd: f64,
+    /// Fix type (0 none, 2 2D, 3 3D, >3 DGPS/RTK).
+    pub fix: f64,
+    /// Satellites used.
+    pub sats: f64,
+    /// Receiver accuracy estimates, m.
+    pub eph: f64,
+    pub epv: f64,
+    /// Specific force, body FRD, m/s².
+    pub ax: f64,
+    pub ay: f64,
+    pub az: f64,
+    /// Gyro rates, body FRD, rad/s.
+    pub gx: f64,
+    pub gy: f64,
+    pub gz: f64,
+    /// Attitude quaternion body FRD -> NED (Hamilton, scalar first).
+    pub qw: f64,
+    pub qx: f64,
+    pub qy: f64,
+    pub qz: f64,
+    /// Barometric altitude, m, positive up.
+    pub baro: f64,
+    /// Ground truth for evaluation (1 = fault); never read by detectors.
+    pub label: f64,
+}
+
+impl Default for Sample {
+    fn default() -> Self {
+        Self::at(f64::NAN)
+    }
+}
+
+/// Column names in contract order; `Sample::get`/`set` index into this.
+pub const COLUMNS: [&str; 26] = [
+    "t", "lat", "lon", "alt", "pn", "pe", "pd", "vn", "ve", "vd", "fix", "sats", "eph", "epv",
+    "ax", "ay", "az", "gx", "gy", "gz", "qw", "qx", "qy", "qz", "baro", "label",
+];
+
+impl Sample {
+    /// An empty row at time `t` (s).
+    pub const fn at(t: f64) -> Self {
+        let n = f64::NAN;
+        Sample {
+            t, lat: n, lon: n, alt: n, pn: n, pe: n, pd: n, vn: n, ve: n, vd: n, fix: n,
+            sats: n, eph: n, epv: n, ax: n, ay: n, az: n, gx: n, gy: n, gz: n, qw: n, qx: n,
+            qy: n, qz: n, baro: n, label: n,
+        }
+    }
+
+    /// Field by column index (see [`COLUMNS`]).
+    pub fn get(&self, i: usize) -> f64 {
+        match i {
+            0 => self.t, 1 => self.lat, 2 => self.lon, 3 => self.alt, 4 => self.pn,
+            5 => self.pe, 6 => self.pd, 7 => self.vn, 8 => self.ve, 9 => self.vd,
+            10 => self.fix, 11 => self.sats, 12 => self.eph, 13 => self.epv, 14 => self.ax,
+            15 => self.ay, 16 => self.az, 17 => self.gx, 18 => self.gy, 19 => self.gz,
+            20 => self.qw, 21 => self.qx, 22 => self.qy, 23 => self.qz, 24 => self.baro,
+            25 => self.label, _ => f64::NAN,
+        }
+    }
+
+    /// Set a field by column index (see [`COLUMNS`]); out-of-range is ignored.
+    pub fn set(&mut self, i: usize, v: f64) {
+        let slot = match i {
+            0 => &mut self.t, 1 => &mut self.lat, 2 => &mut self.lon, 3 => &mut self.alt,
+            4 => &mut self.pn, 5 => &mut self.pe, 6 => &mut self.pd, 7 => &mut self.vn,
+            8 => &mut self.ve, 9 => &mut self.vd, 10 => &mut self.fix, 11 => &mut self.sats,
+            12 => &mut self.eph, 13 => &mut self.epv, 14 => &mut self.ax, 15 => &mut self.ay,
+            16 => &mut self.az, 17 => &mut self.gx, 18 => &mut self.gy, 19 => &mut self.gz,
+            20 => &mut self.qw, 21 => &mut self.qx, 22 => &mut self.qy, 23 => &mut self.qz,
+            24 => &mut self.baro, 25 => &mut self.label,
+            _ => return,
+        };
+        *slot = v;
+    }
+
+    /// Column index of a contract column name.
+    pub fn column_index(name: &str) -> Option<usize> {
+        COLUMNS.iter().position(|c| *c == name)
+    }
+
+    /// Does the row carry a position (lat/lon/alt or pn/pe/pd, all three)?
+    pub fn has_position(&self) -> bool {
+        (self.lat.is_finite() && self.lon.is_finite() && self.alt.is_finite())
+            || (self.pn.is_finite() && self.pe.is_finite() && self.pd.is_finite())
+    }
+
+    /// Contract §1: a row "has a GPS fix" when a full position is present and
+    /// `fix` is absent or >= 2.
+    pub fn has_fix(&self) -> bool {
+        self.has_position() && (self.fix.is_nan() || self.fix >= 2.0)
+    }
+
+    /// A receiver report of "no fix" at this instant (an outage sample):
+    /// `fix` < 2 present, or a position present with `fix` < 2.
+    pub fn reports_no_fix(&self) -> bool {
+        self.fix.is_finite() && self.fix < 2.0
+    }
+
+    /// GPS velocity present (all three axes).
+    pub fn has_velocity(&self) -> bool {
+        self.vn.is_finite() && self.ve.is_finite() && self.vd.is_finite()
+    }
+
+    /// Accelerometer present (all three axes).
+    pub fn has_accel(&self) -> bool {
+        self.ax.is_finite() && self.ay.is_finite() && self.az.is_finite()
+    }
+
+    /// Attitude quaternion present (all four components).
+    pub fn has_attitude(&self) -> bool {
+        self.qw.is_finite() && self.qx.is_finite() && self.qy.is_finite() && self.qz.is_finite()
+    }
+
+    /// Barometric altitude present.
+    pub fn has_baro(&self) -> bool {
+        self.baro.is_finite()
+    }
+}
