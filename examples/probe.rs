@@ -6,13 +6,14 @@ fn main() {
     let oracle = args.get(3).map(|s| s == "oracle").unwrap_or(false);
     let sc = Scenario::preset(name, seed).unwrap();
     let rows = simulate(&sc).unwrap();
-    let mut det = Detector::new(Config::default()).unwrap();
+    let cfg = navguard::config::ConfigInput::from_json(&std::env::var("CFG").unwrap_or_default()).unwrap();
+    let mut det = Detector::new(cfg).unwrap();
     det.set_oracle(oracle);
     let (mut t, mut l, mut st) = (vec![], vec![], vec![]);
     for s in &rows {
         let o = det.push(s).unwrap();
         if !s.label.is_nan() && (args.len() > 4) && o.gps_epoch && ((s.t*10.0).round() as i64 % 5 == 0 || s.label==1.0) {
-            println!("{:7.2} lab {} st {} k {} f {:6.3} r {:7.2} c {:5.2}", s.t, s.label, o.status, o.kind, o.f, o.r, o.c);
+            println!("{:7.2} lab {} st {} k {} f {:6.3} r {:7.2} c {:5.2} rg {:?} cg {:?}", s.t, s.label, o.status, o.kind, o.f, o.r, o.c, det.indicators().r_group.map(|v| (v*100.0).round()/100.0), det.indicators().c_group.map(|v| (v*100.0).round()/100.0));
         }
         t.push(s.t); l.push(s.label); st.push(o.status);
     }

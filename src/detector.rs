@@ -219,7 +219,16 @@ impl Ring {
 }
 
 const IMU_TIMEOUT: f64 = 0.25; // s: older IMU is not used for prediction
-const GATE: f64 = 2.5; // per-group R above which a group is withheld during a fault
+const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
+/// Recovery after a coast: GPS increments agree with the filter's (RMS of
+/// normalised consecutive Δr below this) while the offset is modest...
+const RECOVER_INC: f64 = 2.0;
+/// ...meaning the position departure R is below this: the offset is the
+/// filter's own coast drift, so re-anchor on GPS. A larger static offset is
+/// kept as a fault (a persisting step), until `maxCoast`.
+const RECOVER_R: f64 = 4.0;
+/// Epochs of agreement needed before recovering.
+const RECOVER_EPOCHS: u32 = 5;
 const TRAIN_EPOCHS: usize = 5;
 const TRAIN_LR: f64 = 0.05;
 
@@ -243,6 +252,7 @@ pub struct Detector {
     prev_vel: Vector3<f64>,
     prev_baro_h: Option<f64>,
     coast_start: Option<f64>,
+    calm_epochs: u32,
     group_bad: [bool; GROUPS],
     last: Output,
     last_ind: Indicators,
@@ -281,6 +291,7 @@ impl Detector {
             prev_vel: Vector3::zeros(),
             prev_baro_h: None,
             coast_start: None,
+            calm_epochs: 0,
             group_bad: [false; GROUPS],
             last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
             last_ind: Indicators::default(),
@@ -509,28 +520,39 @@ impl Detector {
         self.last_ind = ind;
         let x = inputs(ind.r, ind.c);
         let f = self.anfis.eval(&x);
-        let fault = if self.oracle { s.label >= 0.5 } else { f >= self.cfg.threshold };
+        let mut fault = if self.oracle { s.label >= 0.5 } else { f >= self.cfg.threshold };
 
-        // Gate: during a fault, withhold the groups that departed.
+        // Gate: during a fault, withhold the sensors that departed. GPS
+        // position and velocity come from one receiver and go together.
         let mut reset = false;
         if fault {
             let start = *self.coast_start.get_or_insert(t);
             if t - start > self.cfg.max_coast {
                 reset = true;
             }
-            for g in 0..GROUPS {
-                self.group_bad[g] = ind.r_group[g].is_finite() && ind.r_group[g] > GATE;
+            let bad = |g: usize| ind.r_group[g].is_finite() && ind.r_group[g] > GATE;
+            let gps_bad = bad(0) || bad(1);
+            self.group_bad = [gps_bad, gps_bad, bad(2)];
+            let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && !(ind.r_group[0] > RECOVER_R) && !bad(2);
+            self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
+            if !self.oracle && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
+                // The GPS is self-consistent again and the offset is within
+                // what the coast could have drifted: re-anchor, verdict normal.
+                reset = true;
+                fault = false;
             }
         } else {
+            self.calm_epochs = 0;
             self.coast_start = None;
             self.group_bad = [false; GROUPS];
         }
         let mut err = None;
         if reset {
-            // Coasted too long to judge: re-anchor on GPS and start over.
+            // Coasted too long to judge (or recovered): re-anchor on GPS.
             kf.reset_to(&y, vel.as_ref());
             self.stats.filter_resets += 1;
             self.coast_start = None;
+            self.calm_epochs = 0;
             self.group_bad = [false; GROUPS];
             self.ind.reset_references();
             self.prev_baro_h = None;

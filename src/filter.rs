@@ -48,9 +48,9 @@ pub struct FilterNoise {
 impl Default for FilterNoise {
     fn default() -> Self {
         FilterNoise {
-            accel: 0.35,
+            accel: 0.2,
             cv_accel: 3.0,
-            accel_bias_rw: 0.005,
+            accel_bias_rw: 0.001,
             baro_rw: 0.05,
             gps_pos_h: 1.0,
             gps_pos_v: 1.5,
@@ -123,7 +123,7 @@ impl Kf {
         for i in 0..3 {
             P[(IP + i, IP + i)] = p_sigma * p_sigma;
             P[(IV + i, IV + i)] = v_sigma * v_sigma;
-            P[(IB + i, IB + i)] = 0.1 * 0.1;
+            P[(IB + i, IB + i)] = 0.05 * 0.05;
         }
         P[(IBARO, IBARO)] = 100.0;
         Kf { x, P, noise, baro_initialised: false }

@@ -34,7 +34,10 @@
 //! with motion (`|ρ|` of order `1/sqrt(3w)`); a sensor that stops following
 //! the motion (frozen GPS, a stuck barometer in a climb, the paper's
 //! collective and contextual faults) gives `Δr ≈ −m` and `|ρ| → 1`.
-//! `C = max` over groups of `|ρ|`, in `[0, 1]`.
+//! `C = max` over groups of `|ρ|`, in `[0, 1]`. The motion energy `Σm²` is
+//! shrunk by one noise variance per term (`Σm² + n` with `m` in σ units), so
+//! a hovering vehicle, whose `m` is just the filter's own corrections, gives
+//! `C ≈ 0` rather than a spurious correlation.
 //!
 //! All window sums are running sums (add the new epoch, subtract the one that
 //! leaves), re-summed exactly once per window length to shed rounding, so the
@@ -138,6 +141,10 @@ pub struct Indicators {
     pub r_group: [f64; GROUPS],
     /// Per-group C.
     pub c_group: [f64; GROUPS],
+    /// Per-group RMS of the consecutive, normalised `Δr` over the short
+    /// window: small when the sensor's increments agree with the filter's,
+    /// whatever its offset (used to recover after a coast).
+    pub inc_group: [f64; GROUPS],
 }
 
 impl Indicators {
@@ -211,7 +218,7 @@ impl IndicatorEngine {
             short: SlidingSum::new(ws),
             pending: [0.0; SUMS],
             pending_any: false,
-            last: Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS] },
+            last: Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS], inc_group: [f64::NAN; GROUPS] },
         }
     }
 
@@ -301,7 +308,7 @@ impl IndicatorEngine {
         self.pending_any = false;
         let lt = self.long.total();
         let st = self.short.total();
-        let mut out = Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS] };
+        let mut out = Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS], inc_group: [f64::NAN; GROUPS] };
         for g in 0..GROUPS {
             let b = g * K;
             if lt[b + 1] > 0.5 && st[b + 1] > 0.5 {
@@ -311,9 +318,17 @@ impl IndicatorEngine {
                 out.r_group[g] = rg;
                 out.r = out.r.max(rg);
             }
+            if st[b + 1] > 0.5 && st[b + 3] > 0.0 {
+                out.inc_group[g] = (st[b + 3] / st[b + 1]).sqrt();
+            }
             let (em, ee, mm) = (lt[b + 2], lt[b + 3], lt[b + 4]);
             if ee > 1e-12 && mm > 1e-12 {
-                let rho = (em / (ee * mm).sqrt()).clamp(-1.0, 1.0).abs();
+                // Motion energy is shrunk by one noise variance per term (e and
+                // m are in σ units): when the vehicle barely moves, m is the
+                // filter's own corrections, correlated with the residuals by
+                // construction, and says nothing about the sensor.
+                let n = lt[b + 1];
+                let rho = (em / (ee * (mm + n)).sqrt()).clamp(-1.0, 1.0).abs();
                 out.c_group[g] = rho;
                 out.c = out.c.max(rho);
             }
