@@ -1,0 +1,370 @@
+//! The wasm-bindgen facade: the contract's streaming API (§2) plus the audit,
+//! simulator and trainer entry points the CLI and the page use. Everything
+//! `#[wasm_bindgen]` lives here; the core never sees a JS type.
+//!
+//! Results are plain JS objects and typed arrays (no class handles to free
+//! in loops). Errors are JS `Error`s naming the row and field; the detector
+//! is untouched by a rejected row or batch.
+
+use js_sys::{Array, Float64Array, Object, Reflect, Uint8Array};
+use wasm_bindgen::prelude::*;
+
+use crate::audit;
+use crate::config::{Config, ConfigInput};
+use crate::detector::{Detector as CoreDetector, Model, Output};
+use crate::logs;
+use crate::metrics;
+use crate::sample::{Sample, COLUMNS};
+use crate::sim;
+
+thread_local! {
+    /// Column names as JS strings, made once: property lookups then cost no
+    /// string conversion per sample.
+    static KEYS: Vec<JsValue> = COLUMNS.iter().map(|c| JsValue::from_str(c)).collect();
+}
+
+fn err(msg: impl core::fmt::Display) -> JsError {
+    JsError::new(&msg.to_string())
+}
+
+fn config_from(v: &JsValue) -> Result<Config, JsError> {
+    if v.is_undefined() || v.is_null() {
+        return Ok(Config::default());
+    }
+    if !v.is_object() {
+        return Err(err("config: must be a plain object"));
+    }
+    let input: ConfigInput = serde_wasm_bindgen::from_value(v.clone()).map_err(|e| err(format!("config: {e}")))?;
+    input.check().map_err(err)
+}
+
+fn set(o: &Object, k: &str, v: &JsValue) {
+    // Setting a property on a fresh plain object cannot fail.
+    let _ = Reflect::set(o, &JsValue::from_str(k), v);
+}
+
+fn output_object(o: &Output) -> JsValue {
+    let obj = Object::new();
+    set(&obj, "t", &o.t.into());
+    set(&obj, "status", &o.status.into());
+    set(&obj, "f", &o.f.into());
+    set(&obj, "r", &o.r.into());
+    set(&obj, "c", &o.c.into());
+    set(&obj, "kind", &o.kind.into());
+    set(&obj, "gpsEpoch", &o.gps_epoch.into());
+    obj.into()
+}
+
+
+#[wasm_bindgen(typescript_custom_section)]
+const TS_TYPES: &'static str = r#"
+/** One navlog row (contract §1). Every field but `t` is optional; units: s, deg, m, m/s, m/s^2, rad/s. */
+export interface NavSample {
+  t: number;
+  lat?: number; lon?: number; alt?: number;
+  pn?: number; pe?: number; pd?: number;
+  vn?: number; ve?: number; vd?: number;
+  fix?: number; sats?: number; eph?: number; epv?: number;
+  ax?: number; ay?: number; az?: number;
+  gx?: number; gy?: number; gz?: number;
+  qw?: number; qx?: number; qy?: number; qz?: number;
+  baro?: number;
+  label?: number;
+}
+/** Columnar batch: every array the same length, NaN = absent. */
+export type NavColumns = { t: Float64Array } & Partial<Record<Exclude<keyof NavSample, "t">, Float64Array>>;
+/** Detector configuration; every field optional, unknown fields throw. */
+export interface DetectorConfig {
+  method?: "anfis";
+  /** Training condition: retrain after this many new fault epochs (default 100). */
+  tc?: number;
+  /** Database length q (default 500). */
+  q?: number;
+  /** Indicator window in GPS epochs (default 10). */
+  window?: number;
+  /** F-indicator threshold (default 0.5). */
+  threshold?: number;
+  retrain?: boolean;
+  /** m */ gpsPosSigma?: number;
+  /** m */ gpsAltSigma?: number;
+  /** m/s */ gpsVelSigma?: number;
+  /** m */ baroSigma?: number;
+  /** m/s^2 */ accelNoise?: number;
+  /** m/s^2 */ cvAccelNoise?: number;
+  /** s; default 1.5 GPS periods */ outageTimeout?: number;
+  /** s */ maxCoast?: number;
+  /** s */ dataGap?: number;
+  model?: NavguardModel;
+}
+export interface NavguardModel {
+  anfis: { centre: number[][]; sigma: number[][]; conseq: number[][] };
+  d1: [number, number][];
+  d2: [number, number][];
+  provenance?: string;
+}
+/** kind: 0 normal, 1 residual fault, 2 GPS outage, 3 no GPS yet. */
+export interface PushResult { t: number; status: 0 | 1; f: number; r: number; c: number; kind: 0 | 1 | 2 | 3; gpsEpoch: boolean }
+export interface ColumnsResult { status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array }
+export interface DetectorStats { rows: number; gps_epochs: number; imu_rows: number; baro_rows: number; retrains: number; filter_resets: number; data_gaps: number; filter_errors: number }
+export interface Metrics { tp: number; fp: number; tn: number; fn: number; accuracy: number; falseAlarmRate: number; misdetectionRate: number; precision: number; recall: number; f2: number; meanDetectionDelay: number; faultIntervals: number; detectedIntervals: number }
+export interface FaultInterval { start: number; end: number; kind: "gps_outage" | "residual"; peakF: number; driver: string; indicator: "R" | "C" | "none"; rows: number }
+export interface AuditReport {
+  format: "csv" | "ulog" | "dataflash"; rows: number; durationS: number; gpsEpochs: number; gpsRateHz: number; imuRateHz: number;
+  gpsAvailable: boolean; gpsFixFraction: number; flaggedGpsEpochFraction: number;
+  faults: FaultInterval[]; dataGaps: { start: number; end: number }[]; missing: string[]; warnings: string[];
+  meta: [string, string][]; metrics?: Metrics; stats: DetectorStats;
+}
+export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array } }
+export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][] }
+"#;
+
+/// The streaming detector (contract §2).
+#[wasm_bindgen]
+pub struct Detector {
+    inner: CoreDetector,
+    /// Reused column buffers for `pushColumns` (grown, never shrunk).
+    cols: Vec<Vec<f64>>,
+}
+
+#[wasm_bindgen]
+impl Detector {
+    /// `new Detector(config)`: every field optional; unknown fields throw.
+    #[wasm_bindgen(constructor)]
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Detector, JsError> {
+        let cfg = config_from(&config)?;
+        let inner = CoreDetector::new(cfg).map_err(err)?;
+        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()] })
+    }
+
+    /// Push one sample (plain object keyed by CSV column names).
+    /// Returns `{ t, status, f, r, c, kind, gpsEpoch }`.
+    #[wasm_bindgen(unchecked_return_type = "PushResult")]
+    pub fn push(&mut self, #[wasm_bindgen(unchecked_param_type = "NavSample")] sample: &JsValue) -> Result<JsValue, JsError> {
+        let row = self.inner.stats().rows;
+        if !sample.is_object() {
+            return Err(err(format!("row {row}: sample must be a plain object")));
+        }
+        let mut s = Sample::default();
+        let mut bad: Option<&'static str> = None;
+        KEYS.with(|keys| {
+            for (i, k) in keys.iter().enumerate() {
+                let v = Reflect::get(sample, k).unwrap_or(JsValue::UNDEFINED);
+                if v.is_undefined() || v.is_null() {
+                    continue;
+                }
+                match v.as_f64() {
+                    Some(x) => s.set(i, x),
+                    None => {
+                        bad = Some(COLUMNS[i]);
+                        break;
+                    }
+                }
+            }
+        });
+        if let Some(field) = bad {
+            return Err(err(format!("row {row}: field '{field}': must be a number")));
+        }
+        let out = self.inner.push(&s).map_err(err)?;
+        Ok(output_object(&out))
+    }
+
+    /// Push a columnar batch: `{ t: Float64Array, lat: Float64Array, ... }`,
+    /// NaN = absent. Validates the whole batch first, so a rejected batch
+    /// changes nothing. Returns `{ status: Uint8Array, f, r, c: Float64Array,
+    /// kind: Uint8Array }`, one entry per row.
+    #[wasm_bindgen(js_name = pushColumns, unchecked_return_type = "ColumnsResult")]
+    pub fn push_columns(&mut self, #[wasm_bindgen(unchecked_param_type = "NavColumns")] columns: &JsValue) -> Result<JsValue, JsError> {
+        if !columns.is_object() {
+            return Err(err("pushColumns: argument must be an object of Float64Arrays"));
+        }
+        let mut present = [false; COLUMNS.len()];
+        let mut n: Option<usize> = None;
+        let res: Result<(), JsError> = KEYS.with(|keys| {
+            for (i, k) in keys.iter().enumerate() {
+                let v = Reflect::get(columns, k).unwrap_or(JsValue::UNDEFINED);
+                if v.is_undefined() || v.is_null() {
+                    continue;
+                }
+                let arr: Float64Array = match v.dyn_into::<Float64Array>() {
+                    Ok(a) => a,
+                    Err(_) => return Err(err(format!("pushColumns: column '{}' must be a Float64Array", COLUMNS[i]))),
+                };
+                let len = arr.length() as usize;
+                match n {
+                    None => n = Some(len),
+                    Some(m) if m != len => {
+                        return Err(err(format!("pushColumns: column '{}' has length {len}, expected {m} (all columns must have the same length)", COLUMNS[i])))
+                    }
+                    _ => {}
+                }
+                let buf = &mut self.cols[i];
+                buf.resize(len, 0.0);
+                arr.copy_to(buf);
+                present[i] = true;
+            }
+            Ok(())
+        });
+        res?;
+        if !present[0] {
+            return Err(err("pushColumns: column 't' is required"));
+        }
+        let n = n.unwrap_or(0);
+        let base = self.inner.stats().rows;
+        let row_at = |cols: &Vec<Vec<f64>>, j: usize| -> Sample {
+            let mut s = Sample::default();
+            for (i, p) in present.iter().enumerate() {
+                if *p {
+                    s.set(i, cols[i][j]);
+                }
+            }
+            s
+        };
+        // Validate all rows (time order included) before touching state.
+        let mut last_t = f64::NEG_INFINITY;
+        for j in 0..n {
+            let s = row_at(&self.cols, j);
+            self.inner.validate(&s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
+            if s.t < last_t {
+                return Err(err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, s.t, last_t)));
+            }
+            last_t = s.t;
+        }
+        let mut status = vec![0u8; n];
+        let mut kind = vec![0u8; n];
+        let mut f = vec![0.0; n];
+        let mut r = vec![0.0; n];
+        let mut c = vec![0.0; n];
+        for j in 0..n {
+            let s = row_at(&self.cols, j);
+            let o = self.inner.push_valid(&s);
+            status[j] = o.status;
+            kind[j] = o.kind;
+            f[j] = o.f;
+            r[j] = o.r;
+            c[j] = o.c;
+        }
+        let obj = Object::new();
+        set(&obj, "status", &Uint8Array::from(&status[..]).into());
+        set(&obj, "f", &Float64Array::from(&f[..]).into());
+        set(&obj, "r", &Float64Array::from(&r[..]).into());
+        set(&obj, "c", &Float64Array::from(&c[..]).into());
+        set(&obj, "kind", &Uint8Array::from(&kind[..]).into());
+        Ok(obj.into())
+    }
+
+    /// Counters: rows, GPS epochs, retrains, resets, data gaps.
+    #[wasm_bindgen(unchecked_return_type = "DetectorStats")]
+    pub fn stats(&self) -> Result<JsValue, JsError> {
+        serde_wasm_bindgen::to_value(&self.inner.stats()).map_err(err)
+    }
+
+    /// The checked configuration in use.
+    #[wasm_bindgen(unchecked_return_type = "object")]
+    pub fn config(&self) -> Result<JsValue, JsError> {
+        serde_wasm_bindgen::to_value(self.inner.config()).map_err(err)
+    }
+}
+
+/// Audit a whole log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised
+/// by content). Returns `{ report, columns: { t, status, f, r, c, kind } }`.
+#[wasm_bindgen(js_name = auditBytes, unchecked_return_type = "AuditResult")]
+pub fn audit_bytes(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
+    let cfg = config_from(&config)?;
+    let log = logs::read_any(bytes).map_err(err)?;
+    let (report, cols) = audit::audit(&log, &cfg).map_err(err)?;
+    let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
+    let rep = serde::Serialize::serialize(&report, &ser).map_err(err)?;
+    let c = Object::new();
+    set(&c, "t", &Float64Array::from(&cols.t[..]).into());
+    set(&c, "status", &Uint8Array::from(&cols.status[..]).into());
+    set(&c, "f", &Float64Array::from(&cols.f[..]).into());
+    set(&c, "r", &Float64Array::from(&cols.r[..]).into());
+    set(&c, "c", &Float64Array::from(&cols.c[..]).into());
+    set(&c, "kind", &Uint8Array::from(&cols.kind[..]).into());
+    let out = Object::new();
+    set(&out, "report", &rep);
+    set(&out, "columns", &c.into());
+    Ok(out.into())
+}
+
+/// Parse a log into columns (for plotting): `{ format, columns: {name: Float64Array}, warnings, missing, meta }`.
+#[wasm_bindgen(js_name = readLog, unchecked_return_type = "LogColumns")]
+pub fn read_log(bytes: &[u8]) -> Result<JsValue, JsError> {
+    let log = logs::read_any(bytes).map_err(err)?;
+    let cols = Object::new();
+    let mut buf = vec![0.0; log.samples.len()];
+    for (i, name) in COLUMNS.iter().enumerate() {
+        if !log.samples.iter().any(|s| !s.get(i).is_nan()) {
+            continue;
+        }
+        for (j, s) in log.samples.iter().enumerate() {
+            buf[j] = s.get(i);
+        }
+        set(&cols, name, &Float64Array::from(&buf[..]).into());
+    }
+    let out = Object::new();
+    set(&out, "format", &JsValue::from_str(log.format));
+    set(&out, "rows", &(log.samples.len() as f64).into());
+    set(&out, "columns", &cols.into());
+    let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
+    set(&out, "warnings", &serde::Serialize::serialize(&log.warnings, &ser).map_err(err)?);
+    set(&out, "missing", &serde::Serialize::serialize(&log.missing, &ser).map_err(err)?);
+    set(&out, "meta", &serde::Serialize::serialize(&log.meta, &ser).map_err(err)?);
+    Ok(out.into())
+}
+
+/// Simulate a built-in scenario by name (see `scenarioNames()`) into navlog CSV text.
+#[wasm_bindgen]
+pub fn simulate(name: &str, seed: f64) -> Result<String, JsError> {
+    if !(seed.is_finite() && seed >= 0.0 && seed.fract() == 0.0 && seed < 9.0e15) {
+        return Err(err(format!("seed: must be a non-negative integer, got {seed}")));
+    }
+    let sc = sim::Scenario::preset(name, seed as u64).map_err(err)?;
+    let rows = sim::simulate(&sc).map_err(err)?;
+    Ok(sim::to_csv(&sc, &rows))
+}
+
+/// Simulate a scenario given as an object (same fields as the `# scenario:` CSV comment).
+#[wasm_bindgen(js_name = simulateScenario)]
+pub fn simulate_scenario(#[wasm_bindgen(unchecked_param_type = "object")] scenario: JsValue) -> Result<String, JsError> {
+    let sc: sim::Scenario = serde_wasm_bindgen::from_value(scenario).map_err(|e| err(format!("scenario: {e}")))?;
+    let rows = sim::simulate(&sc).map_err(err)?;
+    Ok(sim::to_csv(&sc, &rows))
+}
+
+/// Names of the built-in scenarios.
+#[wasm_bindgen(js_name = scenarioNames, unchecked_return_type = "string[]")]
+pub fn scenario_names() -> Array {
+    sim::preset_names().into_iter().map(JsValue::from_str).collect()
+}
+
+/// Metrics over labelled rows (contract definitions).
+#[wasm_bindgen(unchecked_return_type = "Metrics")]
+pub fn metrics(t: &[f64], label: &[f64], status: &[u8]) -> Result<JsValue, JsError> {
+    if t.len() != label.len() || t.len() != status.len() {
+        return Err(err(format!("metrics: lengths differ: t {}, label {}, status {}", t.len(), label.len(), status.len())));
+    }
+    serde_wasm_bindgen::to_value(&metrics::compute(t, label, status)).map_err(err)
+}
+
+/// Train a model from labelled navlog CSV files (an array of `Uint8Array`).
+/// Pass the result as `config.model`.
+#[wasm_bindgen(js_name = trainFromCsv, unchecked_return_type = "NavguardModel")]
+pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] files: Array, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
+    let cfg = config_from(&config)?;
+    let mut streams = vec![];
+    for (i, f) in files.iter().enumerate() {
+        let bytes = f.dyn_into::<Uint8Array>().map_err(|_| err(format!("trainFromCsv: file {i} must be a Uint8Array")))?;
+        let log = logs::csv::read_csv(&bytes.to_vec()).map_err(|e| err(format!("trainFromCsv: file {i}: {e}")))?;
+        streams.push(log.samples);
+    }
+    let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
+    let model = Model::train(&refs, &cfg, 42).map_err(err)?;
+    serde_wasm_bindgen::to_value(&model).map_err(err)
+}
+
+/// Crate version.
+#[wasm_bindgen]
+pub fn version() -> String {
+    env!("CARGO_PKG_VERSION").to_string()
+}
