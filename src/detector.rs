@@ -459,7 +459,8 @@ impl Detector {
             match kf.update_baro(baro) {
                 Ok(()) => {
                     let p_post = kf.P[(2, 2)] + kf.P[(9, 9)] - 2.0 * kf.P[(2, 9)];
-                    self.ind.accept(6, prev, p_post);
+                    let post = kf.baro_innovation(baro).nu[0];
+                    self.ind.accept(6, prev, p_post, post);
                 }
                 Err(e) => {
                     self.filter_failed(e);
@@ -531,8 +532,19 @@ impl Detector {
                 reset = true;
             }
             let bad = |g: usize| ind.r_group[g].is_finite() && ind.r_group[g] > GATE;
-            let gps_bad = bad(0) || bad(1);
-            self.group_bad = [gps_bad, gps_bad, bad(2)];
+            // Fault memory: a group that departed stays withheld for the rest
+            // of the episode, so a fault that flickers around the gate cannot
+            // leak into the filter; a group that never departed (GPS velocity
+            // during a position step or ramp) keeps aiding it, which keeps the
+            // coast drift, and so the departure's normalisation, small.
+            for g in 0..GROUPS {
+                self.group_bad[g] |= bad(g);
+            }
+            if self.group_bad[1] && !self.group_bad[0] && ind.r_group[0] > 1.5 {
+                // Bad GPS velocity with a position residual off its clean
+                // level: same receiver, do not let it re-anchor the estimate.
+                self.group_bad[0] = true;
+            }
             let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && !(ind.r_group[0] > RECOVER_R) && !bad(2);
             self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
             if !self.oracle && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
@@ -561,7 +573,8 @@ impl Detector {
                 match kf.update_position(&y) {
                     Ok(()) => {
                         for a in 0..3 {
-                            self.ind.accept(a, prev_r[a], kf.P[(a, a)]);
+                            let post = y[a] - kf.x[a];
+                            self.ind.accept(a, prev_r[a], kf.P[(a, a)], post);
                         }
                     }
                     Err(e) => err = Some(e),
@@ -571,7 +584,8 @@ impl Detector {
                 match kf.update_velocity(v) {
                     Ok(()) => {
                         for a in 0..3 {
-                            self.ind.accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)]);
+                            let post = v[a] - kf.x[3 + a];
+                            self.ind.accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)], post);
                         }
                     }
                     Err(e) => err = Some(e),

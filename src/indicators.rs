@@ -264,9 +264,12 @@ impl IndicatorEngine {
         d
     }
 
-    /// The detector applied this axis' measurement: move its reference to the
-    /// current residual and learn σ_Δ from the consecutive difference.
-    pub fn accept(&mut self, axis: usize, prev_r: f64, p_post: f64) {
+    /// The detector applied this axis' measurement: learn σ_Δ from the
+    /// consecutive difference and move the reference (and the previous
+    /// residual of the C-indicator) to the post-update residual `r_post =
+    /// y − H x̂⁺`, so the filter's own correction (large after a coast) is
+    /// not mistaken for a departure at the next epoch.
+    pub fn accept(&mut self, axis: usize, prev_r: f64, p_post: f64, r_post: f64) {
         let alpha = self.set.alpha;
         let sigma = self.sigma(axis);
         let Some(a) = self.axes.get_mut(axis) else { return };
@@ -276,7 +279,9 @@ impl IndicatorEngine {
             let lim = 16.0 * sigma * sigma;
             a.ms += alpha * ((e * e).min(lim) - a.ms);
         }
-        a.r_ref = a.last_r;
+        let r_post = if r_post.is_finite() { r_post } else { a.last_r };
+        a.r_ref = r_post;
+        a.prev = r_post;
         a.p_ref = p_post;
     }
 
@@ -394,7 +399,7 @@ mod tests {
             let ind = e.close_epoch();
             rs.push(ind.r);
             if !(3..8).contains(&k) {
-                e.accept(0, prev, 0.0);
+                e.accept(0, prev, 0.0, *r);
             }
         }
         for k in 3..8 {
