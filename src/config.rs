@@ -115,6 +115,22 @@ fn int(field: &str, v: Option<f64>, lo: usize, hi: usize, default: usize) -> Res
 }
 
 impl ConfigInput {
+    /// Field names as users spell them (camelCase).
+    pub const FIELDS: [&'static str; 16] = [
+        "method", "tc", "q", "window", "threshold", "retrain", "gpsPosSigma", "gpsAltSigma", "gpsVelSigma",
+        "baroSigma", "accelNoise", "cvAccelNoise", "outageTimeout", "maxCoast", "dataGap", "model",
+    ];
+
+    /// Reject a field name that is not a config field (for front ends that
+    /// deserialize field by field and so never see unknown keys).
+    pub fn check_field_name(name: &str) -> Result<(), String> {
+        if Self::FIELDS.contains(&name) {
+            Ok(())
+        } else {
+            Err(format!("config.{name}: unknown field (known: {})", Self::FIELDS.join(", ")))
+        }
+    }
+
     /// Validate into a [`Config`].
     pub fn check(&self) -> Result<Config, String> {
         let d = Config::default();
@@ -190,7 +206,7 @@ pub(crate) fn check_anfis(a: &Anfis) -> Result<(), String> {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
 
@@ -206,6 +222,14 @@ mod tests {
         assert!(e.contains("config.tc") && e.contains("got 0"), "{e}");
         let e = ConfigInput::from_json(r#"{"window": 2.5}"#).unwrap_err();
         assert!(e.contains("config.window") && e.contains("2.5"), "{e}");
+        assert!(ConfigInput::check_field_name("bogus").unwrap_err().contains("config.bogus"));
+        assert!(ConfigInput::FIELDS.iter().all(|f| ConfigInput::check_field_name(f).is_ok()));
+        // Every declared field round-trips through serde (FIELDS matches the struct).
+        for f in ConfigInput::FIELDS {
+            let v = match f { "method" => "\"anfis\"", "retrain" => "true", "model" => "null", _ => "1" };
+            let r = ConfigInput::from_json(&format!("{{\"{f}\": {v}}}"));
+            assert!(!r.as_ref().is_err_and(|e| e.contains("unknown field")), "{f}: {r:?}");
+        }
         let e = ConfigInput::from_json(r#"{"bogus": 1}"#).unwrap_err();
         assert!(e.contains("bogus"), "{e}");
         let e = ConfigInput::from_json(r#"{"method": "magic"}"#).unwrap_err();

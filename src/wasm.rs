@@ -34,6 +34,9 @@ fn config_from(v: &JsValue) -> Result<Config, JsError> {
     if !v.is_object() {
         return Err(err("config: must be a plain object"));
     }
+    for k in Object::keys(v.unchecked_ref::<Object>()).iter() {
+        ConfigInput::check_field_name(&k.as_string().unwrap_or_default()).map_err(err)?;
+    }
     let input: ConfigInput = serde_wasm_bindgen::from_value(v.clone()).map_err(|e| err(format!("config: {e}")))?;
     input.check().map_err(err)
 }

@@ -1,0 +1,148 @@
+//! wasm tests (run by `wasm-pack test --node --release -- --test wasm`): each
+//! runs a whole simulated scenario through the wasm facade, the same
+//! functions the npm package exports.
+#![cfg(target_arch = "wasm32")]
+
+use js_sys::{Float64Array, Object, Reflect, Uint8Array};
+use navguard::wasm::{metrics, read_log, simulate, Detector};
+use wasm_bindgen::{JsCast, JsValue};
+use wasm_bindgen_test::*;
+
+fn get(o: &JsValue, k: &str) -> JsValue {
+    Reflect::get(o, &JsValue::from_str(k)).unwrap()
+}
+
+/// Simulated scenario as columns (label split off).
+fn scenario(name: &str, seed: u64) -> (JsValue, Vec<f64>, Vec<f64>) {
+    let csv = simulate(name, seed as f64).unwrap();
+    let log = read_log(csv.as_bytes()).unwrap();
+    let cols = get(&log, "columns");
+    let t = get(&cols, "t").dyn_into::<Float64Array>().unwrap().to_vec();
+    let label = get(&cols, "label").dyn_into::<Float64Array>().unwrap().to_vec();
+    let input = Object::new();
+    for k in js_sys::Object::keys(cols.unchecked_ref::<Object>()).iter() {
+        let name = k.as_string().unwrap();
+        if name != "label" {
+            Reflect::set(&input, &k, &get(&cols, &name)).unwrap();
+        }
+    }
+    (input.into(), t, label)
+}
+
+fn config(pairs: &[(&str, f64)]) -> JsValue {
+    let o = Object::new();
+    for (k, v) in pairs {
+        Reflect::set(&o, &JsValue::from_str(k), &JsValue::from_f64(*v)).unwrap();
+    }
+    o.into()
+}
+
+fn run(name: &str, seed: u64, cfg: JsValue) -> (Vec<f64>, Vec<f64>, Vec<u8>) {
+    let (cols, t, label) = scenario(name, seed);
+    let mut det = Detector::new(cfg).unwrap();
+    let out = det.push_columns(&cols).unwrap();
+    let status = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
+    (t, label, status)
+}
+
+fn rate(m: &JsValue, k: &str) -> f64 {
+    get(m, k).as_f64().unwrap()
+}
+
+#[wasm_bindgen_test]
+fn paper_scenario_meets_the_papers_table1_at_tc100() {
+    let (t, label, status) = run("paper", 1, config(&[("tc", 100.0)]));
+    let m = metrics(&t, &label, &status).unwrap();
+    let (acc, far, mdr) = (rate(&m, "accuracy"), rate(&m, "falseAlarmRate"), rate(&m, "misdetectionRate"));
+    web_sys_log(&format!("paper scenario TC=100: accuracy {acc:.4} (target 0.99), false alarm {far:.4} (target 0.05), misdetection {mdr:.4} (target 0.02)"));
+    assert_eq!(rate(&m, "tp") + rate(&m, "fn"), 300.0, "300 labelled outage epochs");
+    assert!(acc >= 0.977, "accuracy {acc}");
+    assert!(far <= 0.13, "false alarm rate {far}");
+    assert!(mdr <= 0.047, "misdetection rate {mdr}");
+}
+
+#[wasm_bindgen_test]
+fn silent_outages_are_flagged_on_every_row() {
+    let (t, label, status) = run("paper-silent", 2, JsValue::UNDEFINED);
+    let m = metrics(&t, &label, &status).unwrap();
+    assert_eq!(rate(&m, "detectedIntervals"), 3.0);
+    assert!(rate(&m, "misdetectionRate") <= 0.02, "{}", rate(&m, "misdetectionRate"));
+}
+
+#[wasm_bindgen_test]
+fn every_fault_kind_is_detected() {
+    for kind in ["step", "ramp", "noise", "frozen", "zero-velocity", "baro-stuck", "accel-bias"] {
+        for seed in [1u64, 2] {
+            let (t, label, status) = run(kind, seed, JsValue::UNDEFINED);
+            let m = metrics(&t, &label, &status).unwrap();
+            assert_eq!(rate(&m, "detectedIntervals"), 1.0, "{kind} seed {seed} not detected");
+        }
+    }
+}
+
+#[wasm_bindgen_test]
+fn clean_aggressive_flights_stay_quiet() {
+    for seed in [1u64, 2, 3] {
+        let (_, label, status) = run("clean-aggressive", seed, JsValue::UNDEFINED);
+        let epochs = label.iter().filter(|l| !l.is_nan()).count();
+        let flagged = label.iter().zip(&status).filter(|(l, s)| !l.is_nan() && **s == 1).count();
+        assert!((flagged as f64) < 0.01 * epochs as f64, "seed {seed}: {flagged}/{epochs} flagged");
+    }
+}
+
+#[wasm_bindgen_test]
+fn push_and_push_columns_agree_row_for_row() {
+    let (cols, _, _) = scenario("step", 3);
+    let mut a = Detector::new(JsValue::UNDEFINED).unwrap();
+    let out = a.push_columns(&cols).unwrap();
+    let st = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
+    let f = get(&out, "f").dyn_into::<Float64Array>().unwrap().to_vec();
+    let names: Vec<String> = Object::keys(cols.unchecked_ref::<Object>()).iter().map(|k| k.as_string().unwrap()).collect();
+    let arrays: Vec<Vec<f64>> = names.iter().map(|n| get(&cols, n).dyn_into::<Float64Array>().unwrap().to_vec()).collect();
+    let mut b = Detector::new(JsValue::UNDEFINED).unwrap();
+    for i in 0..st.len() {
+        let o = Object::new();
+        for (n, arr) in names.iter().zip(&arrays) {
+            if !arr[i].is_nan() {
+                Reflect::set(&o, &JsValue::from_str(n), &JsValue::from_f64(arr[i])).unwrap();
+            }
+        }
+        let r = b.push(&o.into()).unwrap();
+        assert_eq!(get(&r, "status").as_f64().unwrap() as u8, st[i], "row {i}");
+        assert_eq!(get(&r, "f").as_f64().unwrap().to_bits(), f[i].to_bits(), "row {i}");
+    }
+}
+
+#[wasm_bindgen_test]
+fn bad_input_throws_and_the_detector_keeps_working() {
+    let mut d = Detector::new(JsValue::UNDEFINED).unwrap();
+    let row = |pairs: &[(&str, f64)]| config(pairs);
+    d.push(&row(&[("t", 1.0), ("lat", 31.94), ("lon", 118.79), ("alt", 20.0)])).unwrap();
+    let msg = |e: wasm_bindgen::JsError| -> String {
+        let v: JsValue = e.into();
+        get(&v, "message").as_string().unwrap()
+    };
+    let e = msg(d.push(&row(&[("t", 0.5)])).unwrap_err());
+    assert!(e.contains("'t'") && e.contains("backwards") && e.contains("row 1"), "{e}");
+    let e = msg(d.push(&row(&[("t", 2.0), ("lat", 31.9)])).unwrap_err());
+    assert!(e.contains("'lon'"), "{e}");
+    let e = msg(d.push(&row(&[("t", 2.0), ("ax", f64::INFINITY), ("ay", 0.0), ("az", 0.0)])).unwrap_err());
+    assert!(e.contains("'ax'"), "{e}");
+    let e = msg(Detector::new(row(&[("bogus", 1.0)])).err().unwrap());
+    assert!(e.contains("bogus"), "{e}");
+    let e = msg(Detector::new(row(&[("tc", 0.0)])).err().unwrap());
+    assert!(e.contains("config.tc"), "{e}");
+    let cols = Object::new();
+    Reflect::set(&cols, &"t".into(), &Float64Array::from(&[3.0, 4.0][..])).unwrap();
+    Reflect::set(&cols, &"baro".into(), &Float64Array::from(&[3.0][..])).unwrap();
+    let e = msg(d.push_columns(&cols.into()).unwrap_err());
+    assert!(e.contains("'baro'") && e.contains("length"), "{e}");
+    // Still usable, nothing lost: the next row continues from t=1.
+    let ok = d.push(&row(&[("t", 1.1), ("lat", 31.94), ("lon", 118.79), ("alt", 20.0)])).unwrap();
+    assert_eq!(get(&ok, "status").as_f64(), Some(0.0));
+    assert_eq!(get(&d.stats().unwrap(), "rows").as_f64(), Some(2.0));
+}
+
+fn web_sys_log(s: &str) {
+    wasm_bindgen_test::console_log!("{}", s);
+}
