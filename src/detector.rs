@@ -229,6 +229,9 @@ const RECOVER_INC: f64 = 2.0;
 const RECOVER_R: f64 = 4.0;
 /// Epochs of agreement needed before recovering.
 const RECOVER_EPOCHS: u32 = 5;
+/// Receiver incoherence (RMS of u/σ_u, see `IndicatorEngine::incoherence`)
+/// above which a receiver with a departed position loses its velocity too.
+const INCOHERENT: f64 = 4.0;
 const TRAIN_EPOCHS: usize = 5;
 const TRAIN_LR: f64 = 0.05;
 
@@ -251,6 +254,8 @@ pub struct Detector {
     prev_pos: Vector3<f64>,
     prev_vel: Vector3<f64>,
     prev_baro_h: Option<f64>,
+    /// Previous GPS fix (t, position NED, velocity) for the consistency test.
+    last_gps: Option<(f64, Vector3<f64>, Vector3<f64>)>,
     coast_start: Option<f64>,
     calm_epochs: u32,
     group_bad: [bool; GROUPS],
@@ -290,6 +295,7 @@ impl Detector {
             prev_pos: Vector3::zeros(),
             prev_vel: Vector3::zeros(),
             prev_baro_h: None,
+            last_gps: None,
             coast_start: None,
             calm_epochs: 0,
             group_bad: [false; GROUPS],
@@ -361,6 +367,8 @@ impl Detector {
         if self.last_t.is_some() && dt > self.cfg.data_gap {
             // Every sensor stopped: a logging gap, not a navigation fault.
             self.stats.data_gaps += 1;
+            // No verdict carries across a gap: it starts from "no GPS yet".
+            self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
             self.kf = None;
             self.imu = None;
             self.ind.reset_references();
@@ -517,6 +525,20 @@ impl Detector {
                 self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.P[(3 + a, 3 + a)]);
             }
         }
+        // Position–velocity consistency: the GPS's own position change
+        // against the trapezoid of its velocities (filter-independent).
+        // Not while the velocity is withheld: a biased velocity (degraded
+        // fix, frozen or zeroed output) would fill the window with its own
+        // bias and hold the test up after it clears.
+        match (&vel, self.last_gps) {
+            (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
+                let dtg = t - pt;
+                let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
+                self.ind.observe_pv(u, !self.group_bad[1]);
+            }
+            _ => self.ind.clear_pv(),
+        }
+        self.last_gps = vel.map(|v| (t, y, v));
         let ind = self.ind.close_epoch();
         self.last_ind = ind;
         let x = inputs(ind.r, ind.c);
@@ -544,6 +566,12 @@ impl Detector {
                 // Bad GPS velocity with a position residual off its clean
                 // level: same receiver, do not let it re-anchor the estimate.
                 self.group_bad[0] = true;
+            }
+            if self.group_bad[0] && self.ind.incoherence() > INCOHERENT {
+                // Position departed and the receiver's own position and
+                // velocity disagree epoch after epoch: its velocity is no
+                // better than its position (degraded fix).
+                self.group_bad[1] = true;
             }
             let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && !(ind.r_group[0] > RECOVER_R) && !bad(2);
             self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
@@ -607,6 +635,7 @@ impl Detector {
             }
         } else {
             self.d1.push(x);
+            self.ind.accept_pv();
         }
         let driver = ind.r_driver().map_or(255, |g| g as u8);
         Output {

@@ -366,6 +366,12 @@ pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] fil
     serde_wasm_bindgen::to_value(&model).map_err(err)
 }
 
+/// Bytes of wasm linear memory (for memory-flatness checks).
+#[wasm_bindgen(js_name = wasmMemoryBytes)]
+pub fn wasm_memory_bytes() -> f64 {
+    (core::arch::wasm32::memory_size(0) * 65536) as f64
+}
+
 /// Crate version.
 #[wasm_bindgen]
 pub fn version() -> String {

@@ -1,0 +1,58 @@
+// wasm benchmarks over the built pkg/: push and pushColumns throughput, the
+// whole paper scenario with retraining, .wasm size, and memory over a long
+// stream. Run: npm run bench (builds first).
+import { createRequire } from 'node:module';
+import { statSync } from 'node:fs';
+import { join, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { performance } from 'node:perf_hooks';
+
+const root = join(dirname(fileURLToPath(import.meta.url)), '..');
+const ng = createRequire(import.meta.url)(join(root, 'pkg'));
+const log = ng.readLog(new TextEncoder().encode(ng.simulate('paper', 1)));
+const { label, ...cols } = log.columns;
+const n = cols.t.length;
+
+function best(k, f) {
+  let b = Infinity;
+  for (let i = 0; i < k; i++) { const t0 = performance.now(); f(); b = Math.min(b, performance.now() - t0); }
+  return b;
+}
+
+const whole = best(7, () => { const d = new ng.Detector({ tc: 100 }); d.pushColumns(cols); d.free(); });
+const noRetrain = best(7, () => { const d = new ng.Detector({ retrain: false }); d.pushColumns(cols); d.free(); });
+const names = Object.keys(cols);
+const objs = Array.from({ length: n }, (_, i) => { const s = {}; for (const k of names) if (!Number.isNaN(cols[k][i])) s[k] = cols[k][i]; return s; });
+const push = best(5, () => { const d = new ng.Detector({ retrain: false }); for (const s of objs) d.push(s); d.free(); });
+
+// Long stream: 10 million rows in batches of the paper scenario with time shifted.
+const det = new ng.Detector({});
+const batch = {};
+for (const k of names) batch[k] = new Float64Array(cols[k]);
+const mem0 = ng.__wasm ? 0 : 0;
+const reps = Math.ceil(10_000_000 / n);
+let memStart = 0, memEnd = 0;
+const wasmMem = () => (ng.wasmMemoryBytes ? ng.wasmMemoryBytes() : process.memoryUsage().arrayBuffers);
+const t0 = performance.now();
+for (let r = 0; r < reps; r++) {
+  for (let i = 0; i < n; i++) batch.t[i] = cols.t[i] + r * 250.0;
+  det.pushColumns(batch);
+  if (r === 10) memStart = wasmMem();
+}
+memEnd = wasmMem();
+const longMs = performance.now() - t0;
+
+const wasmSize = statSync(join(root, 'pkg', 'navguard_bg.wasm')).size;
+const fmt = (x) => Math.round(x).toLocaleString('en-US');
+console.log(JSON.stringify({
+  rows: n,
+  paperScenarioTc100Ms: +whole.toFixed(2),
+  pushColumnsRowsPerS: Math.round(n / (noRetrain / 1000)),
+  pushRowsPerS: Math.round(n / (push / 1000)),
+  longStreamRows: reps * n,
+  longStreamRowsPerS: Math.round((reps * n) / (longMs / 1000)),
+  memoryBytesAfter10Batches: memStart,
+  memoryBytesAtEnd: memEnd,
+  wasmBytes: wasmSize,
+}, null, 2));
+console.error(`pushColumns ${fmt(n / (noRetrain / 1000))} rows/s, push ${fmt(n / (push / 1000))} rows/s, paper scenario ${whole.toFixed(1)} ms, .wasm ${fmt(wasmSize)} B`);

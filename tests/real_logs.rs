@@ -1,0 +1,63 @@
+//! Native tests over the real logs in ../shared/data (see its README).
+#![cfg(not(target_arch = "wasm32"))]
+
+use navguard::audit::audit;
+use navguard::config::Config;
+use navguard::logs::read_any;
+
+fn data(p: &str) -> Vec<u8> {
+    let path = format!("{}/../shared/data/{p}", env!("CARGO_MANIFEST_DIR"));
+    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+#[test]
+fn every_log_is_recognised_by_content() {
+    for (p, fmt) in [
+        ("px4/sample.ulg", "ulog"),
+        ("px4/sample_log_small.ulg", "ulog"),
+        ("px4/sample_px4_events.ulg", "ulog"),
+        ("px4/sample_logging_tagged_and_default_params.ulg", "ulog"),
+        ("px4/sample_appended_multiple.ulg", "ulog"),
+        ("px4/quadrotor_local.ulg", "ulog"),
+        ("ardupilot/Loiter_RTL.bin", "dataflash"),
+        ("ardupilot/truncated_plane.BIN", "dataflash"),
+        ("csv/ansfl_phantom4_rtk_clean.csv", "csv"),
+    ] {
+        let log = read_any(&data(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
+        assert_eq!(log.format, fmt, "{p}");
+        assert!(!log.samples.is_empty(), "{p}: no rows");
+        assert!(log.samples.windows(2).all(|w| w[0].t <= w[1].t), "{p}: rows not sorted by time");
+    }
+}
+
+#[test]
+fn missing_gps_is_reported_and_no_verdicts_are_made() {
+    for p in ["px4/quadrotor_local.ulg", "px4/sample.ulg"] {
+        let log = read_any(&data(p)).unwrap();
+        let (rep, cols) = audit(&log, &Config::default()).unwrap();
+        assert!(!rep.gps_available, "{p}");
+        assert!(rep.warnings.iter().any(|w| w.contains("GPS unavailable")), "{p}: {:?}", rep.warnings);
+        assert!(rep.faults.is_empty(), "{p}: {:?}", rep.faults);
+        assert!(cols.status.iter().all(|s| *s == 0), "{p}");
+    }
+    let log = read_any(&data("px4/sample.ulg")).unwrap();
+    assert!(log.warnings.iter().any(|w| w.contains("no GPS topic")), "{:?}", log.warnings);
+}
+
+#[test]
+fn truncated_dataflash_reads_partially_with_a_warning() {
+    let log = read_any(&data("ardupilot/truncated_plane.BIN")).unwrap();
+    assert!(log.warnings.iter().any(|w| w.contains("truncated")), "{:?}", log.warnings);
+    let (rep, _) = audit(&log, &Config::default()).unwrap();
+    assert!(rep.rows > 0);
+}
+
+#[test]
+fn ardupilot_logging_pause_is_a_data_gap_not_a_fault() {
+    let log = read_any(&data("ardupilot/Loiter_RTL.bin")).unwrap();
+    let (rep, _) = audit(&log, &Config::default()).unwrap();
+    // The pause runs 51.6–73.8 s on the boot clock.
+    assert!(rep.data_gaps.iter().any(|g| g.start < 52.0 && g.end > 73.0), "{:?}", rep.data_gaps);
+    assert!(rep.faults.iter().all(|f| f.end < 51.5 || f.start > 73.9), "a fault inside the logging pause: {:?}", rep.faults);
+    assert!(rep.warnings.iter().any(|w| w.contains("data gap")));
+}
