@@ -145,6 +145,9 @@ pub struct Indicators {
     /// window: small when the sensor's increments agree with the filter's,
     /// whatever its offset (used to recover after a coast).
     pub inc_group: [f64; GROUPS],
+    /// Position–velocity consistency `R_pv` (NaN when unavailable): folded
+    /// into `r_group[0]`, reported for diagnosis.
+    pub pv: f64,
 }
 
 impl Indicators {
@@ -165,6 +168,8 @@ struct AxisState {
     prev: f64,
     r_ref: f64,
     p_ref: f64,
+    /// Largest prior variance since the reference was set.
+    p_peak: f64,
     /// Learnt mean square of Δr on accepted epochs.
     ms: f64,
     last_r: f64,
@@ -191,6 +196,9 @@ impl Default for IndicatorSettings {
     }
 }
 
+/// The position–velocity window is this many indicator windows long.
+pub const PV_WINDOW_FACTOR: usize = 5;
+
 /// Sliding-window indicator engine. Allocates only at construction.
 #[derive(Clone, Debug)]
 pub struct IndicatorEngine {
@@ -201,6 +209,155 @@ pub struct IndicatorEngine {
     pending: [f64; SUMS],
     pending_any: bool,
     last: Indicators,
+    pv: PvTest,
+}
+
+/// Position–velocity consistency over a long window (see the module docs).
+#[derive(Clone, Debug)]
+struct PvTest {
+    ring: Vec<[f64; 3]>,
+    head: usize,
+    len: usize,
+    sum: [f64; 3],
+    since_resum: usize,
+    /// Learnt mean square of the window sum per axis.
+    ms: [f64; 3],
+    /// Learnt mean square of one epoch's mismatch per axis.
+    ms_u: [f64; 3],
+    /// The current epoch's raw mismatch (for learning).
+    last_u: [f64; 3],
+    /// Short ring of per-epoch `mean_a (u_a/σ_u)²` (incoherence).
+    inc: [f64; 4],
+    inc_len: usize,
+    inc_head: usize,
+    inc_cap: usize,
+    /// Statistic of the current epoch, NaN when not observed this epoch.
+    stat: f64,
+}
+
+/// Initial and floor σ of the window sum `S`, m.
+const PV_SIGMA0: f64 = 1.0;
+const PV_FLOOR: f64 = 0.15;
+/// Forgetting factor of the σ_S estimate (per accepted epoch): slow, so a
+/// growing fault is not learnt as noise before it is caught.
+const PV_ALPHA: f64 = 0.005;
+/// Initial and floor σ of one epoch's mismatch `u`, m; `u` is clipped at
+/// `PV_CLIP` of those before it enters the sum, so a jump (a step, a noise
+/// burst, a degraded fix) adds at most a few σ and leaves the sum with the
+/// window instead of holding it up for the window's whole length.
+const PV_U0: f64 = 0.3;
+const PV_U_FLOOR: f64 = 0.03;
+const PV_CLIP: f64 = 3.0;
+const PV_ALPHA_U: f64 = 0.02;
+
+impl PvTest {
+    fn new(cap: usize) -> Self {
+        PvTest {
+            ring: vec![[0.0; 3]; cap.max(1)],
+            head: 0,
+            len: 0,
+            sum: [0.0; 3],
+            since_resum: 0,
+            ms: [PV_SIGMA0 * PV_SIGMA0; 3],
+            ms_u: [PV_U0 * PV_U0; 3],
+            last_u: [0.0; 3],
+            inc: [0.0; 4],
+            inc_len: 0,
+            inc_head: 0,
+            inc_cap: cap.div_ceil(4 * PV_WINDOW_FACTOR).clamp(1, 4),
+            stat: f64::NAN,
+        }
+    }
+    fn clear(&mut self) {
+        self.head = 0;
+        self.len = 0;
+        self.sum = [0.0; 3];
+        self.since_resum = 0;
+        self.stat = f64::NAN;
+    }
+    fn sigma(&self, a: usize) -> f64 {
+        self.ms[a].sqrt().max(PV_FLOOR)
+    }
+    /// Record one epoch's raw mismatch for the incoherence measure only.
+    fn note(&mut self, u: [f64; 3]) {
+        if !u.iter().all(|v| v.is_finite()) {
+            self.inc_len = 0;
+            return;
+        }
+        let z2 = (0..3).map(|a| (u[a] * u[a] / self.ms_u[a].max(PV_U_FLOOR * PV_U_FLOOR)).min(1e6)).sum::<f64>() / 3.0;
+        self.inc[self.inc_head] = z2;
+        self.inc_head = (self.inc_head + 1) % self.inc_cap;
+        self.inc_len = (self.inc_len + 1).min(self.inc_cap);
+    }
+    /// Smallest per-epoch RMS of `u/σ_u` over the last ⌈w/4⌉ epochs (NaN
+    /// when none): the minimum, so one jump (a step's edge) does not count,
+    /// only disagreement at every epoch.
+    fn incoherence(&self) -> f64 {
+        if self.inc_len == 0 {
+            return f64::NAN;
+        }
+        self.inc[..self.inc_len].iter().fold(f64::INFINITY, |m, &z| m.min(z)).sqrt()
+    }
+    fn push(&mut self, u: [f64; 3]) {
+        if !u.iter().all(|v| v.is_finite()) {
+            self.clear();
+            return;
+        }
+        self.last_u = u;
+        let u: [f64; 3] = core::array::from_fn(|a| {
+            let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
+            u[a].clamp(-lim, lim)
+        });
+        let cap = self.ring.len();
+        if self.len == cap {
+            let old = self.ring[self.head];
+            for a in 0..3 {
+                self.sum[a] -= old[a];
+            }
+        } else {
+            self.len += 1;
+        }
+        self.ring[self.head] = u;
+        for a in 0..3 {
+            self.sum[a] += u[a];
+        }
+        self.head = (self.head + 1) % cap;
+        self.since_resum += 1;
+        if self.since_resum >= cap {
+            self.since_resum = 0;
+            self.sum = [0.0; 3];
+            for x in &self.ring[..self.len] {
+                for a in 0..3 {
+                    self.sum[a] += x[a];
+                }
+            }
+        }
+        self.stat = if self.len == cap {
+            let z2: f64 = (0..3).map(|a| (self.sum[a] / self.sigma(a)).powi(2)).sum();
+            (z2 / 3.0).sqrt()
+        } else {
+            f64::NAN
+        };
+    }
+    fn accept(&mut self) {
+        if self.len == 0 {
+            return;
+        }
+        for a in 0..3 {
+            let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
+            let x = (self.last_u[a] * self.last_u[a]).min(lim * lim);
+            self.ms_u[a] += PV_ALPHA_U * (x - self.ms_u[a]);
+        }
+        if self.len < self.ring.len() {
+            return;
+        }
+        for a in 0..3 {
+            let sg = self.sigma(a);
+            // Winsorised at 3σ.
+            let x = (self.sum[a] * self.sum[a]).min(9.0 * sg * sg);
+            self.ms[a] += PV_ALPHA * (x - self.ms[a]);
+        }
+    }
 }
 
 impl IndicatorEngine {
@@ -209,7 +366,7 @@ impl IndicatorEngine {
         let ws = w.div_ceil(4).max(1);
         let ax = |a: usize| {
             let s = set.initial[group_of(a)];
-            AxisState { prev: 0.0, r_ref: 0.0, p_ref: 0.0, ms: s * s, last_r: 0.0, has_prev: false, has_ref: false }
+            AxisState { prev: 0.0, r_ref: 0.0, p_ref: 0.0, p_peak: 0.0, ms: s * s, last_r: 0.0, has_prev: false, has_ref: false }
         };
         IndicatorEngine {
             set,
@@ -218,7 +375,15 @@ impl IndicatorEngine {
             short: SlidingSum::new(ws),
             pending: [0.0; SUMS],
             pending_any: false,
-            last: Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS], inc_group: [f64::NAN; GROUPS] },
+            last: Indicators {
+                r: 0.0,
+                c: 0.0,
+                r_group: [f64::NAN; GROUPS],
+                c_group: [f64::NAN; GROUPS],
+                inc_group: [f64::NAN; GROUPS],
+                pv: f64::NAN,
+            },
+            pv: PvTest::new(PV_WINDOW_FACTOR * w),
         }
     }
 
@@ -242,9 +407,13 @@ impl IndicatorEngine {
         if !a.has_ref {
             a.r_ref = r;
             a.p_ref = p_prior;
+            a.p_peak = p_prior;
             a.has_ref = true;
         }
-        let var = sigma * sigma + (p_prior - a.p_ref).max(0.0);
+        if p_prior.is_finite() {
+            a.p_peak = a.p_peak.max(p_prior);
+        }
+        let var = sigma * sigma + (a.p_peak - a.p_ref).max(0.0);
         let d = (r - a.r_ref) / var.sqrt();
         let base = g * K;
         self.pending[base] += d * d;
@@ -283,6 +452,38 @@ impl IndicatorEngine {
         a.r_ref = r_post;
         a.prev = r_post;
         a.p_ref = p_post;
+        a.p_peak = p_post;
+    }
+
+    /// Feed the position–velocity mismatch `u` of this GPS epoch (per NED
+    /// axis: GPS position change minus the trapezoid of the GPS velocities
+    /// over the interval, m).
+    pub fn observe_pv(&mut self, u: [f64; 3], into_sum: bool) {
+        self.pv.note(u);
+        if into_sum {
+            self.pv.push(u);
+        } else {
+            self.pv.clear();
+        }
+    }
+
+    /// Smallest, over the short window, per-epoch RMS (over axes) of the
+    /// mismatch in σ_u units: ≲1 for a receiver whose position and velocity
+    /// agree, large when they disagree at every epoch (a degraded fix).
+    pub fn incoherence(&self) -> f64 {
+        self.pv.incoherence()
+    }
+
+    /// The epoch was accepted as normal: learn σ_S of the mismatch sum.
+    pub fn accept_pv(&mut self) {
+        self.pv.accept();
+    }
+
+    /// No usable position–velocity pair this epoch (no velocity, a reset):
+    /// restart the mismatch window.
+    pub fn clear_pv(&mut self) {
+        self.pv.clear();
+        self.pv.inc_len = 0;
     }
 
     /// Residual the axis last had before the current one (for `accept`).
@@ -300,6 +501,7 @@ impl IndicatorEngine {
         self.short.clear();
         self.pending = [0.0; SUMS];
         self.pending_any = false;
+        self.pv.clear();
     }
 
     /// Close the epoch: push pending sums and compute R and C.
@@ -313,13 +515,24 @@ impl IndicatorEngine {
         self.pending_any = false;
         let lt = self.long.total();
         let st = self.short.total();
-        let mut out = Indicators { r: 0.0, c: 0.0, r_group: [f64::NAN; GROUPS], c_group: [f64::NAN; GROUPS], inc_group: [f64::NAN; GROUPS] };
+        let mut out = Indicators {
+            r: 0.0,
+            c: 0.0,
+            r_group: [f64::NAN; GROUPS],
+            c_group: [f64::NAN; GROUPS],
+            inc_group: [f64::NAN; GROUPS],
+            pv: self.pv.stat,
+        };
+        let pv = core::mem::replace(&mut self.pv.stat, f64::NAN);
         for g in 0..GROUPS {
             let b = g * K;
             if lt[b + 1] > 0.5 && st[b + 1] > 0.5 {
                 let rl = (lt[b].max(0.0) / lt[b + 1]).sqrt();
                 let rs = (st[b].max(0.0) / st[b + 1]).sqrt();
-                let rg = rl.min(rs);
+                let mut rg = rl.min(rs);
+                if g == 0 && pv.is_finite() {
+                    rg = rg.max(pv);
+                }
                 out.r_group[g] = rg;
                 out.r = out.r.max(rg);
             }
@@ -343,7 +556,7 @@ impl IndicatorEngine {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use approx::assert_abs_diff_eq;
