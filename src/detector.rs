@@ -46,7 +46,7 @@ impl Model {
     /// `q` per class with a seeded RNG, and fit the ANFIS by hybrid learning.
     ///
     /// Cleaning: fault epochs whose indicators never left the clean region
-    /// (`R < 2` and `C < 0.6`, e.g. the first seconds of a slow ramp) are
+    /// (`R < 3` and `C < 0.6`, e.g. the first seconds of a slow ramp) are
     /// dropped from D2: they carry no fault signature and would only teach the
     /// model to alarm on clean data.
     pub fn train(streams: &[&[Sample]], cfg: &Config, seed: u64) -> Result<Model, String> {
@@ -63,7 +63,7 @@ impl Model {
                 }
                 let x = inputs(o.r, o.c);
                 if s.label >= 0.5 {
-                    if o.r >= 2.0 || o.c >= 0.6 {
+                    if has_signature(o.r, o.c) {
                         fault.push(x);
                     }
                 } else {
@@ -133,6 +133,15 @@ impl Model {
         Ok(())
     }
 }
+
+/// A fault epoch carries a fault signature: its indicators left the region
+/// clean data occupies (`R ≥ 3` or `C ≥ 0.6`). Used to clean the training
+/// set and to admit online verdicts into D2.
+pub fn has_signature(r: f64, c: f64) -> bool {
+    r >= SIG_R || c >= SIG_C
+}
+const SIG_R: f64 = 3.0;
+const SIG_C: f64 = 0.6;
 
 /// What kind of verdict a row carries.
 pub mod kind {
@@ -233,6 +242,9 @@ const RECOVER_EPOCHS: u32 = 5;
 /// above which a receiver with a departed position loses its velocity too.
 const INCOHERENT: f64 = 4.0;
 const TRAIN_EPOCHS: usize = 5;
+/// F above which a fault verdict (below which a normal one) enters D2 (D1).
+const CONFIDENT_FAULT: f64 = 0.8;
+const CONFIDENT_NORMAL: f64 = 0.2;
 const TRAIN_LR: f64 = 0.05;
 
 /// The streaming detector.
@@ -265,6 +277,10 @@ pub struct Detector {
     oracle: bool,
     train_x: Vec<[f64; 2]>,
     train_y: Vec<f64>,
+    /// The shipped model's databases D1₀ ∪ D2₀ (labels 0/1): the validation
+    /// set a retrained ANFIS must not do worse on.
+    d0_x: Vec<[f64; 2]>,
+    d0_y: Vec<f64>,
 }
 
 impl Detector {
@@ -305,6 +321,8 @@ impl Detector {
             oracle: false,
             train_x: Vec::with_capacity(2 * q),
             train_y: Vec::with_capacity(2 * q),
+            d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
+            d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
             cfg,
         }
     }
@@ -626,15 +644,23 @@ impl Detector {
             self.filter_failed(e);
         }
 
-        // Online cycle: file this epoch by its own verdict (eqs. 15–20).
+        // Online cycle: file this epoch by its own verdict (eqs. 15–20), but
+        // only a confident one: a fault verdict with F ≥ 0.8 and a fault
+        // signature, a normal one with F ≤ 0.2. Borderline verdicts, where a
+        // false alarm would sit, are not fed back, so retraining cannot
+        // teach itself its own mistakes.
         if fault {
-            self.d2.push(x);
-            self.new_faults += 1;
+            if f >= CONFIDENT_FAULT && has_signature(ind.r, ind.c) {
+                self.d2.push(x);
+                self.new_faults += 1;
+            }
             if self.cfg.retrain && !self.oracle && self.new_faults >= self.cfg.tc {
                 self.retrain();
             }
         } else {
-            self.d1.push(x);
+            if f <= CONFIDENT_NORMAL {
+                self.d1.push(x);
+            }
             self.ind.accept_pv();
         }
         let driver = ind.r_driver().map_or(255, |g| g as u8);
@@ -651,7 +677,10 @@ impl Detector {
     }
 
     /// Retrain the ANFIS on D1 ∪ D2 (hybrid learning). Keeps the old model
-    /// if training produces anything non-finite.
+    /// if training produces anything non-finite, or if the candidate
+    /// misclassifies more of D0 (the shipped model's own databases) than the
+    /// current one: online data may drift, but not so far that the detector
+    /// forgets the labelled faults it shipped with.
     pub fn retrain(&mut self) {
         self.new_faults = 0;
         self.train_x.clear();
@@ -666,10 +695,18 @@ impl Detector {
         }
         let mut cand = self.anfis.clone();
         cand.train_hybrid(&self.train_x, &self.train_y, TRAIN_EPOCHS, TRAIN_LR);
-        if cand.is_finite() {
+        // Validation on D0: the candidate must classify the shipped model's
+        // databases at least as well as the current ANFIS does.
+        if cand.is_finite() && self.d0_errors(&cand) <= self.d0_errors(&self.anfis) {
             self.anfis = cand;
             self.stats.retrains += 1;
         }
+    }
+
+    /// Misclassified D0 samples at the configured threshold.
+    fn d0_errors(&self, a: &Anfis) -> usize {
+        let th = self.cfg.threshold;
+        self.d0_x.iter().zip(&self.d0_y).filter(|(x, y)| (a.eval(x) >= th) != (**y >= 0.5)).count()
     }
 }
 
