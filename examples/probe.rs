@@ -143,6 +143,19 @@ fn main() {
             }
         }
         "logs" => logs(),
+        "logtrace" => {
+            let f = &args[2];
+            let (a, b): (f64, f64) = (args[3].parse().unwrap(), args[4].parse().unwrap());
+            let data = navguard::logs::read_any(&std::fs::read(f).unwrap()).unwrap();
+            let mut det = Detector::new(cfg()).unwrap();
+            for s in &data.samples {
+                let Ok(o) = det.push(s) else { continue };
+                if s.t >= a && s.t <= b && (o.gps_epoch || s.fix.is_finite()) {
+                    let i = det.indicators();
+                    println!("{:8.2} fix {} sats {} st {} k {} f {:6.3} r {:6.2} c {:4.2} pv {:5.2} rg {:?} pos {:?}", s.t, s.fix, s.sats, o.status, o.kind, o.f, o.r, o.c, i.pv, i.r_group.map(|v| (v * 100.0).round() / 100.0), det.position().map(|p| (p[2]*10.0).round()/10.0));
+                }
+            }
+        }
         _ => {
             let seed: u64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(1);
             let oracle = args.get(3).map(|s| s == "oracle").unwrap_or(false);

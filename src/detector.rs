@@ -443,13 +443,24 @@ impl Detector {
         out
     }
 
+    /// Outage: after a fix has been seen, the receiver says it has none, or
+    /// (flying) no fix arrived within the timeout; it lasts until the next
+    /// fix. A receiver that reports losing its fix is an outage on the
+    /// ground too; mere silence counts only in flight (logs often stop
+    /// sending GPS after landing).
     fn is_outage(&self, t: f64, s: &Sample) -> bool {
         let Some(lf) = self.last_fix_t else { return false };
-        if !self.fix_seen || !self.flying() {
+        if !self.fix_seen {
             return false;
         }
+        if self.last.kind == kind::OUTAGE {
+            return true;
+        }
+        if s.reports_no_fix() && t - lf > 0.5 * self.gps_dt {
+            return true;
+        }
         let timeout = self.cfg.outage_timeout.unwrap_or(1.5 * self.gps_dt + 0.02);
-        t - lf > timeout || (s.reports_no_fix() && t - lf > 0.5 * self.gps_dt)
+        self.flying() && t - lf > timeout
     }
 
     /// Flying: moving faster than 1 m/s or more than 2 m above the anchor.
