@@ -76,7 +76,7 @@ impl Anchor {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use approx::assert_abs_diff_eq;

@@ -84,7 +84,7 @@ pub fn compute(t: &[f64], label: &[f64], status: &[u8]) -> Metrics {
     m
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use approx::assert_abs_diff_eq;

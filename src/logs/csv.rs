@@ -165,7 +165,7 @@ pub fn read_csv(bytes: &[u8]) -> Result<LogData, String> {
     Ok(LogData { format: "csv", samples: rows, meta, warnings: r.warnings, missing, topic_counts: vec![] })
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
 

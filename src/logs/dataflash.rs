@@ -963,7 +963,7 @@ fn euler_deg_to_quat(roll: f64, pitch: f64, yaw: f64) -> [f64; 4] {
 
 // ---------------------------------------------------------------------------
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
 

@@ -1218,7 +1218,7 @@ fn truncate_utf8(s: &mut String, max: usize) {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     //! Expected counts come from pyulog 1.3.0 (`pip install pyulog`), with
     //! `ULog(path)` and, per `d in ulog.data_list`, `len(d.data['timestamp'])`
