@@ -4,10 +4,13 @@
 //   navguard simulate NAME [--seed N] [--out FILE.csv]
 //   navguard report [--seed N] [--json] [--quick]
 //   navguard train LABELLED.csv [...] --out MODEL.json
-import { readFileSync, writeFileSync } from 'node:fs';
+import { readFileSync, writeFileSync, statSync, readdirSync } from 'node:fs';
+import { Worker } from 'node:worker_threads';
+import { availableParallelism } from 'node:os';
 import { createRequire } from 'node:module';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { performance } from 'node:perf_hooks';
 import { perSampleCsv } from '../lib/csv.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
 
@@ -16,6 +19,7 @@ const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'navguard
 
 const USAGE = `usage:
   navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]
+  navguard audit DIR [--json] [--summary OUT.json] [--config CFG.json] [--jobs N]
   navguard simulate NAME [--seed N] [--out FILE.csv]     (names: ${ng.scenarioNames().join(', ')})
   navguard report [--seed N] [--json] [--quick]
   navguard train LABELLED.csv [...] --out MODEL.json`;
@@ -80,12 +84,62 @@ function audit(file, opt) {
   console.log(L.join('\n'));
 }
 
+/** Audit every file in a folder in parallel (worker_threads), one summary. */
+async function auditDir(dir, opt) {
+  const files = readdirSync(dir, { withFileTypes: true }).filter((d) => d.isFile()).map((d) => join(dir, d.name)).sort();
+  if (!files.length) fail(`${dir}: no files`);
+  const config = readConfig(opt.config);
+  const jobs = Math.max(1, Math.min(Number(opt.jobs ?? availableParallelism()), files.length));
+  const results = [];
+  let next = 0, done = 0;
+  const t0 = performance.now();
+  await new Promise((resolve) => {
+    const workers = Array.from({ length: jobs }, () => new Worker(new URL('../lib/audit-worker.mjs', import.meta.url)));
+    const feed = (w) => {
+      if (next < files.length) w.postMessage({ file: files[next++], config });
+      else w.terminate();
+    };
+    for (const w of workers) {
+      w.on('message', (r) => {
+        results.push(r);
+        done++;
+        progress(`audited ${done}/${files.length}: ${r.file}`);
+        if (done === files.length) resolve();
+        feed(w);
+      });
+      w.on('error', (e) => { results.push({ file: '(worker)', error: e.message }); done++; if (done >= files.length) resolve(); });
+      feed(w);
+    }
+  });
+  progressDone();
+  results.sort((a, b) => a.file.localeCompare(b.file));
+  const rows = results.map((r) => r.error ? { file: r.file, error: r.error } : {
+    file: r.file, format: r.report.format, durationS: r.report.durationS, gpsAvailable: r.report.gpsAvailable,
+    gpsRateHz: r.report.gpsRateHz, flaggedGpsEpochFraction: r.report.flaggedGpsEpochFraction,
+    residualFaults: r.report.faults.filter((f) => f.kind === 'residual').length,
+    outages: r.report.faults.filter((f) => f.kind === 'gps_outage').length,
+    dataGaps: r.report.dataGaps.length, warnings: r.report.warnings, missing: r.report.missing, ms: r.ms,
+  });
+  const summary = { dir, files: files.length, failed: rows.filter((r) => r.error).length, wallMs: performance.now() - t0, jobs, logs: rows };
+  const json = JSON.stringify(summary, (k, v) => (typeof v === 'number' && !Number.isFinite(v) ? null : v), 2);
+  if (opt.summary) writeFileSync(opt.summary, json + '\n');
+  if (opt.json) { console.log(json); return; }
+  console.log(`${dir}: ${files.length} files, ${summary.failed} unreadable, ${jobs} workers, ${(summary.wallMs / 1000).toFixed(2)} s`);
+  console.log('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps');
+  for (const r of rows) {
+    const name = r.file.length > 48 ? '...' + r.file.slice(-45) : r.file;
+    if (r.error) { console.log(`  ${name.padEnd(48)}  unreadable: ${r.error}`); continue; }
+    console.log(`  ${name.padEnd(48)}  ${r.format.padEnd(9)} ${r.durationS.toFixed(1).padStart(6)} ${r.gpsAvailable ? r.gpsRateHz.toFixed(1).padStart(6) : '    no'}  ${(100 * r.flaggedGpsEpochFraction).toFixed(2).padStart(6)}%  ${String(r.residualFaults).padStart(5)} ${String(r.outages).padStart(7)} ${String(r.dataGaps).padStart(4)}`);
+  }
+}
+
 function main() {
   const [cmd, ...rest] = process.argv.slice(2);
   const { pos, opt } = parse(rest);
   switch (cmd) {
     case 'audit':
-      if (pos.length !== 1) fail(`audit takes one FILE\n${USAGE}`);
+      if (pos.length !== 1) fail(`audit takes one FILE or DIR\n${USAGE}`);
+      try { if (statSync(pos[0]).isDirectory()) return auditDir(pos[0], opt); } catch { /* audit() reports it */ }
       return audit(pos[0], opt);
     case 'simulate': {
       if (pos.length !== 1) fail(`simulate takes one scenario NAME\n${USAGE}`);
