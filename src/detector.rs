@@ -141,7 +141,7 @@ pub fn has_signature(r: f64, c: f64) -> bool {
     r >= SIG_R || c >= SIG_C
 }
 const SIG_R: f64 = 3.0;
-const SIG_C: f64 = 0.6;
+const SIG_C: f64 = 0.7;
 
 /// What kind of verdict a row carries.
 pub mod kind {

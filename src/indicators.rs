@@ -61,6 +61,9 @@ pub const fn group_of(axis: usize) -> usize {
     }
 }
 
+/// Shrinkage of the C-indicator's motion energy, noise variances per term.
+pub const C_SHRINK: f64 = 0.5;
+
 // Per-group sums kept per epoch: Σd², n, Σem, Σee, Σmm.
 const K: usize = 5;
 const SUMS: usize = GROUPS * K;
@@ -545,7 +548,7 @@ impl IndicatorEngine {
                 // m are in σ units): when the vehicle barely moves, m is the
                 // filter's own corrections, correlated with the residuals by
                 // construction, and says nothing about the sensor.
-                let n = lt[b + 1];
+                let n = C_SHRINK * lt[b + 1];
                 let rho = (em / (ee * (mm + n)).sqrt()).clamp(-1.0, 1.0).abs();
                 out.c_group[g] = rho;
                 out.c = out.c.max(rho);
