@@ -4,10 +4,24 @@
 //! baro, and at each GPS fix compute residuals, the R/C indicators and the
 //! ANFIS F-indicator; `F ≥ threshold` is a fault. A fault epoch's residual
 //! groups that departed are not fed to the filter (it coasts on the IMU), so a
-//! fault cannot drag the estimate it is judged against. Each epoch's own
-//! verdict files its (R, C) into database D1 (normal) or D2 (fault), ring
-//! buffers of length q (eqs. 15–20); after TC new fault epochs the ANFIS is
-//! retrained on D1 ∪ D2 by hybrid learning. No fix while flying, after a fix
+//! fault cannot drag the estimate it is judged against. A group that departed
+//! stays withheld for the rest of the fault episode (fault memory); GPS
+//! velocity is withheld with a departed position when the receiver is
+//! incoherent (its position and velocity disagree at every recent epoch),
+//! and GPS position with a departed velocity when its residual is off its
+//! clean level. A group that never departed (velocity during a position
+//! step or ramp) keeps aiding the filter, so the coast drift, and with it the
+//! departure's normalisation, stays small.
+//!
+//! Online cycle (eqs. 15–20): each epoch's own verdict files its (R, C) into
+//! database D1 (normal) or D2 (fault), ring buffers of length q, but only a
+//! confident verdict: `F ≤ 0.2` into D1, `F ≥ 0.8` with a fault signature
+//! (`R ≥ 3` or `C ≥ 0.7`, the same rule that cleans the training set) into
+//! D2. After TC new D2 entries the ANFIS is retrained on D1 ∪ D2 by hybrid
+//! learning, and the candidate replaces the current ANFIS only if it
+//! misclassifies no more of D0 (the shipped model's databases) than the
+//! current one. Without these guards retraining fed on its own borderline
+//! false alarms and widened the fault region with each cycle. No fix while flying, after a fix
 //! has been seen, is a GPS outage (a fault); rows between fixes carry the last
 //! epoch's verdict. Every allocation happens in `new`.
 
@@ -46,7 +60,7 @@ impl Model {
     /// `q` per class with a seeded RNG, and fit the ANFIS by hybrid learning.
     ///
     /// Cleaning: fault epochs whose indicators never left the clean region
-    /// (`R < 3` and `C < 0.6`, e.g. the first seconds of a slow ramp) are
+    /// (`R < 3` and `C < 0.7`, e.g. the first seconds of a slow ramp) are
     /// dropped from D2: they carry no fault signature and would only teach the
     /// model to alarm on clean data.
     pub fn train(streams: &[&[Sample]], cfg: &Config, seed: u64) -> Result<Model, String> {
@@ -135,7 +149,7 @@ impl Model {
 }
 
 /// A fault epoch carries a fault signature: its indicators left the region
-/// clean data occupies (`R ≥ 3` or `C ≥ 0.6`). Used to clean the training
+/// clean data occupies (`R ≥ 3` or `C ≥ 0.7`). Used to clean the training
 /// set and to admit online verdicts into D2.
 pub fn has_signature(r: f64, c: f64) -> bool {
     r >= SIG_R || c >= SIG_C

@@ -10,20 +10,42 @@
 //! the update so a fault cannot pull the estimate it is judged against.
 //!
 //! **R-indicator (departure).** For each axis
-//! `d_t = (r_t − r_ref) / sqrt(σ²_Δ + max(0, P⁻_t − P⁺_ref))`, where `r_ref` is
-//! the residual of the last epoch the detector *accepted* as normal. While
-//! everything is normal `r_ref = r_{t−1}` and `d_t` is exactly the paper's
-//! `Δr_t`, scaled. During a fault the reference stays put, so a step, a
-//! frozen output or a ramp keeps `d` large for as long as it lasts instead of
-//! only at its edges. `σ_Δ` is learnt from accepted epochs (a winsorised
-//! exponential mean square of `Δr`, floored by the config), and the `P` term
-//! adds the prediction uncertainty gathered while the filter coasted.
+//! `d_t = (r_t − r_ref) / sqrt(σ²_Δ + max(0, P̂_t − P⁺_ref))`, where `r_ref` is
+//! the *post-update* residual `y − H x̂⁺` of the last epoch the detector
+//! *accepted* as normal, `P⁺_ref` its posterior variance, and `P̂_t` the
+//! largest prior variance `P⁻` seen since then. While everything is normal
+//! the gain is small, `r_ref ≈ r_{t−1}` and `d_t` is the paper's `Δr_t`,
+//! scaled. Taking the post-update residual means the filter's own correction
+//! (large when the first fix after a coast re-anchors it) is not read as a
+//! departure at the next epoch; taking the peak variance means the drift a
+//! coast accumulated stays explained after a velocity update has shrunk
+//! `P⁻`. During a fault the reference stays put, so a step, a frozen output
+//! or a ramp keeps `d` large for as long as it lasts instead of only at its
+//! edges. `σ_Δ` is learnt from accepted epochs (a winsorised exponential mean
+//! square of `Δr`, floored by the config).
 //! Per group (position, velocity, baro) we take the RMS of `d` over the axes
 //! and over a long window of `w` epochs and a short one of `⌈w/4⌉` epochs, and
 //! keep the *smaller*: a departure must be both sustained and current, so the
 //! indicator rises at the first faulty epoch (the long window contains it at
 //! full weight) and falls at the first clean one (the short window has moved
 //! on). `R = max` over groups; `R ≈ 1` on clean data.
+//!
+//! **Position–velocity consistency (folded into the position group's R).**
+//! `Δr` cannot see a fault that grows by less than the noise per epoch (a
+//! slow ramp): the reference follows it. So, filter-independently, per NED
+//! axis and GPS epoch, `u_t = (p_t − p_{t−1}) − ½(v_t + v_{t−1})(t − t_{t−1})`
+//! (GPS position change minus the trapezoid of the GPS velocities), clipped
+//! at `3σ_u` (σ_u a winsorised mean square of `u` on accepted epochs, start
+//! 0.3 m, floor 0.03 m) so a jump adds at most a few σ and leaves with the
+//! window; `S = Σ u` over `5w` epochs; `R_pv = sqrt(mean_axes (S/σ_S)²)`
+//! with `σ_S` learnt the same way but slowly (α = 0.005, start 1 m, floor
+//! 0.15 m), only once the window is full. `R_pos = max(R_pos, R_pv)`. The
+//! window restarts while the GPS velocity is withheld (a biased velocity
+//! would fill it). The detector also uses the smallest per-epoch
+//! `sqrt(mean_axes (u/σ_u)²)` over the last `⌈w/4⌉` epochs as receiver
+//! *incoherence*: when it is large at every recent epoch, the receiver's
+//! position and velocity disagree (a degraded fix) and the velocity is
+//! withheld with the position.
 //!
 //! **C-indicator (motion correlation).** Per group, the Pearson correlation
 //! through the origin between the consecutive `Δr_t` and the filter's own
@@ -35,9 +57,12 @@
 //! the motion (frozen GPS, a stuck barometer in a climb, the paper's
 //! collective and contextual faults) gives `Δr ≈ −m` and `|ρ| → 1`.
 //! `C = max` over groups of `|ρ|`, in `[0, 1]`. The motion energy `Σm²` is
-//! shrunk by one noise variance per term (`Σm² + n` with `m` in σ units), so
-//! a hovering vehicle, whose `m` is just the filter's own corrections, gives
-//! `C ≈ 0` rather than a spurious correlation.
+//! shrunk by half a noise variance per term:
+//! `ρ = Σem / sqrt(Σe² · (Σm² + λn))`, `λ = 0.5`, with `e`, `m` in σ units
+//! and `n` the number of axis observations in the window, so a hovering
+//! vehicle, whose `m` is just the filter's own corrections, gives `C ≈ 0`
+//! rather than a spurious correlation. (A frozen sensor over ten epochs of
+//! `m = 5σ` gives `C = sqrt(250/(250+λ·n))`, ≈ 0.98 for `n = 10`.)
 //!
 //! All window sums are running sums (add the new epoch, subtract the one that
 //! leaves), re-summed exactly once per window length to shed rounding, so the
@@ -638,7 +663,12 @@ mod tests {
             e.close_epoch();
         }
         let i = e.close_epoch();
-        assert_abs_diff_eq!(i.c, 1.0, epsilon = 1e-9);
+        // Hand computation: σ = 0.1, so m is 10·m_k in σ units; the 9
+        // consecutive differences give e = −m, hence Σem = −Σmm, Σee = Σmm =
+        // 100·Σ_{k=1..9}(0.5+0.01k)² = 272.85; the window holds n = 20 axis
+        // observations (axes 0 and 1 × 10 epochs), shrinkage 0.5·20 = 10:
+        // C = Σmm / sqrt(Σmm·(Σmm + 10)) = sqrt(272.85/282.85) = 0.982164.
+        assert_abs_diff_eq!(i.c, 0.982_163_7, epsilon = 1e-6);
         // Noise uncorrelated with motion: alternate-sign residual changes.
         let mut e = IndicatorEngine::new(settings(10));
         let mut last = Indicators::default();
@@ -649,5 +679,48 @@ mod tests {
         }
         // Σ e·m = 0.5·(−0.2 + 0.2 − …) over 9 diffs = −0.1 ⇒ |ρ| = 0.1·... small.
         assert!(last.c < 0.35, "C={}", last.c);
+    }
+
+    #[test]
+    fn pv_window_sum_with_clipping_hand_computed() {
+        // Window 4, σ_S = 1 (initial), σ_u = 0.3 (initial) so the clip is 0.9.
+        let mut p = PvTest::new(4);
+        for _ in 0..3 {
+            p.push([0.5, 0.0, 0.0]);
+            assert!(p.stat.is_nan(), "no statistic before the window is full");
+        }
+        p.push([0.5, 0.0, 0.0]);
+        // S = (2, 0, 0): sqrt((2/1)² / 3) = 1.154701.
+        assert_abs_diff_eq!(p.stat, 2.0 / 3f64.sqrt(), epsilon = 1e-12);
+        // A 5 m jump enters clipped at 0.9: S = 0.5·3 + 0.9 = 2.4 → 1.385641.
+        p.push([5.0, 0.0, 0.0]);
+        assert_abs_diff_eq!(p.stat, 2.4 / 3f64.sqrt(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn incoherence_is_the_smallest_recent_epoch() {
+        // Window 40 → short ring ⌈40/20⌉ = 2 epochs; σ_u = 0.3.
+        let mut p = PvTest::new(40);
+        p.note([0.3, 0.3, 0.3]); // z² = 1 per axis → 1
+        p.note([3.0, 0.0, 0.0]); // z² = 100/3
+        assert_abs_diff_eq!(p.incoherence(), 1.0, epsilon = 1e-12);
+        p.note([3.0, 0.0, 0.0]);
+        assert_abs_diff_eq!(p.incoherence(), (100.0f64 / 3.0).sqrt(), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn reference_moves_to_the_post_update_residual() {
+        // A 3 m innovation corrected to 0.1 m by the update: the next epoch's
+        // residual 0.1 is no departure (d = 0), not a 2.9 m one.
+        let mut e = IndicatorEngine::new(settings(4));
+        e.observe(0, 0.0, 0.0, 0.0);
+        e.close_epoch();
+        e.accept(0, 0.0, 0.0, 0.0);
+        let prev = e.previous(0);
+        e.observe(0, 3.0, 0.0, 9.0);
+        e.close_epoch();
+        e.accept(0, prev, 0.5, 0.1);
+        let d = e.observe(0, 0.1, 0.0, 0.5);
+        assert_abs_diff_eq!(d, 0.0, epsilon = 1e-12);
     }
 }
