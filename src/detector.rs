@@ -284,6 +284,9 @@ pub struct Detector {
     last_gps: Option<(f64, Vector3<f64>, Vector3<f64>)>,
     coast_start: Option<f64>,
     calm_epochs: u32,
+    /// The current fault episode withheld the GPS velocity or was an
+    /// outage: the filter has coasted on the IMU alone.
+    receiver_lost: bool,
     group_bad: [bool; GROUPS],
     last: Output,
     last_ind: Indicators,
@@ -328,6 +331,7 @@ impl Detector {
             last_gps: None,
             coast_start: None,
             calm_epochs: 0,
+            receiver_lost: false,
             group_bad: [false; GROUPS],
             last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
             last_ind: Indicators::default(),
@@ -443,6 +447,7 @@ impl Detector {
                 o.kind = kind::OUTAGE;
                 o.f = 1.0;
                 // The filter coasts; the first fix back is judged against it.
+                self.receiver_lost = true;
                 if self.coast_start.is_none() {
                     self.coast_start = self.last_fix_t;
                 }
@@ -616,7 +621,17 @@ impl Detector {
                 // better than its position (degraded fix).
                 self.group_bad[1] = true;
             }
-            let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && !(ind.r_group[0] > RECOVER_R) && !bad(2);
+            if self.group_bad[1] {
+                self.receiver_lost = true;
+            }
+            // When the whole receiver was withheld (outage, degraded fix) the
+            // filter coasted on the IMU alone and the position offset is its
+            // own drift, whatever its size: recover on agreement of the
+            // increments and a clean velocity. When only the position was
+            // withheld (velocity kept aiding), a large offset is the fault
+            // itself (a persisting step) and is kept until `maxCoast`.
+            let offset_ok = if self.receiver_lost { !bad(1) } else { !(ind.r_group[0] > RECOVER_R) };
+            let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !bad(2);
             self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
             if !self.oracle && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
                 // The GPS is self-consistent again and the offset is within
@@ -628,6 +643,7 @@ impl Detector {
             self.calm_epochs = 0;
             self.coast_start = None;
             self.group_bad = [false; GROUPS];
+            self.receiver_lost = false;
         }
         let mut err = None;
         if reset {
@@ -637,6 +653,7 @@ impl Detector {
             self.coast_start = None;
             self.calm_epochs = 0;
             self.group_bad = [false; GROUPS];
+            self.receiver_lost = false;
             self.ind.reset_references();
             self.prev_baro_h = None;
         } else {
