@@ -11,7 +11,14 @@
 //! and GPS position with a departed velocity when its residual is off its
 //! clean level. A group that never departed (velocity during a position
 //! step or ramp) keeps aiding the filter, so the coast drift, and with it the
-//! departure's normalisation, stays small.
+//! departure's normalisation, stays small. A fault episode ends early
+//! (re-anchoring the filter on GPS) once the GPS increments agree with the
+//! filter's for 5 epochs and the baro is clean, and either the episode
+//! withheld the whole receiver (outage, degraded fix: the offset is the
+//! IMU coast's own drift, whatever its size) and the velocity no longer
+//! departs, or only the position was withheld and its departure is below 4
+//! (a larger offset with clean velocity aiding is a persisting step).
+//! A receiver that reports losing its fix is an outage on the ground too.
 //!
 //! Online cycle (eqs. 15–20): each epoch's own verdict files its (R, C) into
 //! database D1 (normal) or D2 (fault), ring buffers of length q, but only a
