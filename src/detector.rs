@@ -257,6 +257,8 @@ const RECOVER_INC: f64 = 2.0;
 /// filter's own coast drift, so re-anchor on GPS. A larger static offset is
 /// kept as a fault (a persisting step), until `maxCoast`.
 const RECOVER_R: f64 = 4.0;
+/// ...and the position–velocity statistic below this.
+const RECOVER_PV: f64 = 2.0;
 /// Epochs of agreement needed before recovering.
 const RECOVER_EPOCHS: u32 = 5;
 /// Receiver incoherence (RMS of u/σ_u, see `IndicatorEngine::incoherence`)
@@ -637,7 +639,11 @@ impl Detector {
             // increments and a clean velocity. When only the position was
             // withheld (velocity kept aiding), a large offset is the fault
             // itself (a persisting step) and is kept until `maxCoast`.
-            let offset_ok = if self.receiver_lost { !bad(1) } else { !(ind.r_group[0] > RECOVER_R) };
+            // A position-only episode also needs the position–velocity test
+            // back in its clean range, so a ramp that paused the verdict is
+            // not re-anchored on.
+            let offset_ok =
+                if self.receiver_lost { !bad(1) } else { !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV) };
             let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !bad(2);
             self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
             if !self.oracle && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
