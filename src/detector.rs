@@ -643,7 +643,7 @@ impl Detector {
             // back in its clean range, so a ramp that paused the verdict is
             // not re-anchored on.
             let offset_ok =
-                if self.receiver_lost { !bad(1) } else { !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV) };
+                if self.receiver_lost { !(ind.r_group[1] > RECOVER_R) } else { !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV) };
             let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !bad(2);
             self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
             if !self.oracle && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
