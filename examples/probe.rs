@@ -21,7 +21,7 @@ fn run(rows: &[Sample], oracle: bool, trace: bool) -> (metrics::Metrics, String)
         if !s.label.is_nan() && trace && o.gps_epoch && ((s.t * 10.0).round() as i64 % 5 == 0 || s.label == 1.0 || o.status == 1) {
             let i = det.indicators();
             println!(
-                "{:7.2} lab {} st {} k {} f {:6.3} r {:7.2} c {:5.2} pv {:5.2} rg {:?} cg {:?}",
+                "{:7.2} lab {} st {} k {} f {:6.3} r {:7.2} c {:5.2} pv {:5.2} rg {:?} cg {:?} ig {:?}",
                 s.t,
                 s.label,
                 o.status,
@@ -31,7 +31,8 @@ fn run(rows: &[Sample], oracle: bool, trace: bool) -> (metrics::Metrics, String)
                 o.c,
                 i.pv,
                 i.r_group.map(|v| (v * 100.0).round() / 100.0),
-                i.c_group.map(|v| (v * 100.0).round() / 100.0)
+                i.c_group.map(|v| (v * 100.0).round() / 100.0),
+                i.inc_group.map(|v| (v * 100.0).round() / 100.0)
             );
         }
         t.push(s.t);

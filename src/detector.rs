@@ -296,6 +296,8 @@ pub struct Detector {
     /// The current fault episode withheld the GPS velocity or was an
     /// outage: the filter has coasted on the IMU alone.
     receiver_lost: bool,
+    /// Consecutive normal GPS verdicts.
+    normal_run: u32,
     group_bad: [bool; GROUPS],
     last: Output,
     last_ind: Indicators,
@@ -341,6 +343,7 @@ impl Detector {
             coast_start: None,
             calm_epochs: 0,
             receiver_lost: false,
+            normal_run: 0,
             group_bad: [false; GROUPS],
             last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
             last_ind: Indicators::default(),
@@ -630,6 +633,7 @@ impl Detector {
                 // better than its position (degraded fix).
                 self.group_bad[1] = true;
             }
+            self.normal_run = 0;
             if self.group_bad[1] {
                 self.receiver_lost = true;
             }
@@ -656,7 +660,13 @@ impl Detector {
             self.calm_epochs = 0;
             self.coast_start = None;
             self.group_bad = [false; GROUPS];
-            self.receiver_lost = false;
+            // A single normal verdict inside a coast does not end it: the
+            // filter's offset is still the coast's until the GPS has been
+            // accepted for a few epochs.
+            self.normal_run += 1;
+            if self.normal_run >= RECOVER_EPOCHS {
+                self.receiver_lost = false;
+            }
         }
         let mut err = None;
         if reset {
