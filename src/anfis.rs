@@ -288,7 +288,7 @@ impl Anfis {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use approx::assert_abs_diff_eq;

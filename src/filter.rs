@@ -344,7 +344,7 @@ pub fn quat_from_wxyz(w: f64, x: f64, y: f64, z: f64) -> Option<UnitQuaternion<f
     Some(UnitQuaternion::from_quaternion(q))
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use approx::assert_abs_diff_eq;

@@ -608,7 +608,7 @@ pub fn to_csv(sc: &Scenario, rows: &[Sample]) -> String {
     out
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use approx::assert_abs_diff_eq;

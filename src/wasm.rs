@@ -118,7 +118,7 @@ export interface AuditReport {
   meta: [string, string][]; metrics?: Metrics; stats: DetectorStats;
 }
 export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array } }
-export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][] }
+export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][]; topicCounts: [string, number][] }
 "#;
 
 /// The streaming detector (contract §2).
@@ -169,6 +169,29 @@ impl Detector {
         }
         let out = self.inner.push(&s).map_err(err)?;
         Ok(output_object(&out))
+    }
+
+    /// Push one row given as the contract's 26 columns in `COLUMNS` order
+    /// (NaN = absent). The package's JS `push` packs objects into a reused
+    /// Float64Array and calls this: JS property reads are far cheaper than
+    /// 26 `Reflect.get` calls from wasm.
+    #[wasm_bindgen(js_name = pushRow, unchecked_return_type = "PushResult")]
+    pub fn push_row(&mut self, row: &[f64]) -> Result<JsValue, JsError> {
+        if row.len() != COLUMNS.len() {
+            return Err(err(format!("pushRow: expected {} values, got {}", COLUMNS.len(), row.len())));
+        }
+        let mut s = Sample::default();
+        for (i, v) in row.iter().enumerate() {
+            s.set(i, *v);
+        }
+        let out = self.inner.push(&s).map_err(err)?;
+        Ok(output_object(&out))
+    }
+
+    /// Rows accepted so far (the next row's index in error messages).
+    #[wasm_bindgen(js_name = rowCount)]
+    pub fn row_count(&self) -> f64 {
+        self.inner.stats().rows as f64
     }
 
     /// Push a columnar batch: `{ t: Float64Array, lat: Float64Array, ... }`,
@@ -313,6 +336,7 @@ pub fn read_log(bytes: &[u8]) -> Result<JsValue, JsError> {
     set(&out, "warnings", &serde::Serialize::serialize(&log.warnings, &ser).map_err(err)?);
     set(&out, "missing", &serde::Serialize::serialize(&log.missing, &ser).map_err(err)?);
     set(&out, "meta", &serde::Serialize::serialize(&log.meta, &ser).map_err(err)?);
+    set(&out, "topicCounts", &serde::Serialize::serialize(&log.topic_counts, &ser).map_err(err)?);
     Ok(out.into())
 }
 
@@ -370,6 +394,12 @@ pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] fil
 #[wasm_bindgen(js_name = wasmMemoryBytes)]
 pub fn wasm_memory_bytes() -> f64 {
     (core::arch::wasm32::memory_size(0) * 65536) as f64
+}
+
+/// The contract's column names, in the order `pushRow` takes them.
+#[wasm_bindgen(js_name = columnNames, unchecked_return_type = "string[]")]
+pub fn column_names() -> Array {
+    COLUMNS.iter().map(|c| JsValue::from_str(c)).collect()
 }
 
 /// Crate version.

@@ -15,7 +15,7 @@ import { perSampleCsv } from '../lib/csv.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
 
 const require = createRequire(import.meta.url);
-const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'navguard.js'));
+const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
 
 const USAGE = `usage:
   navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]

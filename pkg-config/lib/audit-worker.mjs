@@ -7,7 +7,7 @@ import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 
 const require = createRequire(import.meta.url);
-const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'navguard.js'));
+const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
 
 parentPort.on('message', ({ file, config }) => {
   const t0 = performance.now();
