@@ -103,13 +103,38 @@ impl<const M: usize> Default for Innovation<M> {
     }
 }
 
+/// Covariance transition accumulated since the last [`Kf::flush`].
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    /// Elapsed time, s.
+    t: f64,
+    /// Position and velocity sensitivity to the accelerometer bias.
+    phi_pb: Matrix3<f64>,
+    phi_vb: Matrix3<f64>,
+    /// p–v process noise per axis (pp, pv, vv), bias and baro noise.
+    q11: f64,
+    q12: f64,
+    q22: f64,
+    qb: f64,
+    qbaro: f64,
+}
+
+impl Default for Pending {
+    fn default() -> Self {
+        Pending { t: 0.0, phi_pb: Matrix3::zeros(), phi_vb: Matrix3::zeros(), q11: 0.0, q12: 0.0, q22: 0.0, qb: 0.0, qbaro: 0.0 }
+    }
+}
+
 /// The filter.
 #[derive(Clone, Debug)]
 pub struct Kf {
     pub x: StateVec,
+    /// State covariance, current after any innovation or update call (or
+    /// [`Kf::flush`]); between predictions and the next measurement it lags.
     pub P: StateMat,
     pub noise: FilterNoise,
     baro_initialised: bool,
+    pending: Pending,
 }
 
 impl Kf {
@@ -126,7 +151,7 @@ impl Kf {
             P[(IB + i, IB + i)] = 0.05 * 0.05;
         }
         P[(IBARO, IBARO)] = 100.0;
-        Kf { x, P, noise, baro_initialised: false }
+        Kf { x, P, noise, baro_initialised: false, pending: Pending::default() }
     }
 
     pub fn position(&self) -> Vector3<f64> {
@@ -143,6 +168,13 @@ impl Kf {
 
     /// Propagate by `dt` s. With `imu`, strapdown mechanisation in NED
     /// (flat earth: a few km around the anchor); without, constant velocity.
+    ///
+    /// The state moves at once; the covariance does not. Its transition is
+    /// accumulated in closed form (the p–v block is time-invariant and the
+    /// bias coupling composes as 3×3 sums), and `P = Φ P Φᵀ + Q` runs once
+    /// when a measurement needs `P` ([`Kf::flush`]). That turns a 10×10
+    /// product per IMU sample into one per GPS or baro update, the same
+    /// result up to the bias-noise-to-velocity coupling inside one interval.
     pub fn predict(&mut self, dt: f64, imu: Option<&ImuInput>) -> Result<(), FilterError> {
         if !dt.is_finite() || dt < 0.0 {
             return Err(FilterError::NonFinite("time step"));
@@ -150,52 +182,72 @@ impl Kf {
         if dt == 0.0 {
             return Ok(());
         }
-        let mut F = StateMat::identity();
-        let mut Q = StateMat::zeros();
         let dt2 = dt * dt;
         let q_acc;
+        let pd = &mut self.pending;
         match imu {
             Some(u) => {
                 let C: Matrix3<f64> = u.q.to_rotation_matrix().into_inner();
-                let f = u.f_body - self.accel_bias();
+                let f = u.f_body - self.x.fixed_rows::<3>(IB);
                 let a = C * f + Vector3::new(0.0, 0.0, GRAVITY);
                 if !a.iter().all(|v| v.is_finite()) {
                     return Err(FilterError::NonFinite("acceleration"));
                 }
-                let p = self.position() + self.velocity() * dt + a * (0.5 * dt2);
-                let v = self.velocity() + a * dt;
+                let v0 = self.x.fixed_rows::<3>(IV).into_owned();
+                let p = self.x.fixed_rows::<3>(IP) + v0 * dt + a * (0.5 * dt2);
                 self.x.fixed_rows_mut::<3>(IP).copy_from(&p);
-                self.x.fixed_rows_mut::<3>(IV).copy_from(&v);
-                F.fixed_view_mut::<3, 3>(IV, IB).copy_from(&(-C * dt));
-                F.fixed_view_mut::<3, 3>(IP, IB).copy_from(&(-C * (0.5 * dt2)));
+                self.x.fixed_rows_mut::<3>(IV).copy_from(&(v0 + a * dt));
+                // Compose the step's transition onto the pending one.
+                pd.phi_pb += pd.phi_vb * dt - C * (0.5 * dt2);
+                pd.phi_vb -= C * dt;
                 q_acc = self.noise.accel * self.noise.accel;
-                let qb = self.noise.accel_bias_rw * self.noise.accel_bias_rw * dt;
-                for i in 0..3 {
-                    Q[(IB + i, IB + i)] = qb;
-                }
+                pd.qb += self.noise.accel_bias_rw * self.noise.accel_bias_rw * dt;
             }
             None => {
-                let v = self.velocity();
-                let p = self.position() + v * dt;
+                let p = self.x.fixed_rows::<3>(IP) + self.x.fixed_rows::<3>(IV) * dt;
                 self.x.fixed_rows_mut::<3>(IP).copy_from(&p);
+                pd.phi_pb += pd.phi_vb * dt;
                 q_acc = self.noise.cv_accel * self.noise.cv_accel;
             }
         }
-        for i in 0..3 {
-            F[(IP + i, IV + i)] = dt;
-            // White acceleration noise integrated over dt (continuous-white-noise model).
-            Q[(IP + i, IP + i)] = q_acc * dt2 * dt / 3.0;
-            Q[(IP + i, IV + i)] = q_acc * dt2 / 2.0;
-            Q[(IV + i, IP + i)] = q_acc * dt2 / 2.0;
-            Q[(IV + i, IV + i)] = q_acc * dt;
+        // White-acceleration noise on p–v, composed exactly per axis.
+        pd.q11 += 2.0 * dt * pd.q12 + dt2 * pd.q22 + q_acc * dt2 * dt / 3.0;
+        pd.q12 += dt * pd.q22 + q_acc * dt2 / 2.0;
+        pd.q22 += q_acc * dt;
+        pd.qbaro += self.noise.baro_rw * self.noise.baro_rw * dt;
+        pd.t += dt;
+        if !self.x.iter().all(|v| v.is_finite()) {
+            return Err(FilterError::NonFinite("state"));
         }
-        Q[(IBARO, IBARO)] = self.noise.baro_rw * self.noise.baro_rw * dt;
+        Ok(())
+    }
+
+    /// Apply the accumulated covariance propagation (see [`Kf::predict`]).
+    pub fn flush(&mut self) -> Result<(), FilterError> {
+        let pd = core::mem::take(&mut self.pending);
+        if pd.t == 0.0 {
+            return Ok(());
+        }
+        let mut F = StateMat::identity();
+        let mut Q = StateMat::zeros();
+        for i in 0..3 {
+            F[(IP + i, IV + i)] = pd.t;
+            Q[(IP + i, IP + i)] = pd.q11;
+            Q[(IP + i, IV + i)] = pd.q12;
+            Q[(IV + i, IP + i)] = pd.q12;
+            Q[(IV + i, IV + i)] = pd.q22;
+            Q[(IB + i, IB + i)] = pd.qb;
+        }
+        Q[(IBARO, IBARO)] = pd.qbaro;
+        F.fixed_view_mut::<3, 3>(IP, IB).copy_from(&pd.phi_pb);
+        F.fixed_view_mut::<3, 3>(IV, IB).copy_from(&pd.phi_vb);
         self.P = F * self.P * F.transpose() + Q;
         self.check_health()
     }
 
     /// Predicted GPS position innovation without updating.
-    pub fn position_innovation(&self, y: &Vector3<f64>) -> Innovation<3> {
+    pub fn position_innovation(&mut self, y: &Vector3<f64>) -> Innovation<3> {
+        self.flush_or_poison();
         let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v];
         let mut out = Innovation::<3>::default();
         for i in 0..3 {
@@ -206,7 +258,8 @@ impl Kf {
     }
 
     /// Predicted GPS velocity innovation without updating.
-    pub fn velocity_innovation(&self, y: &Vector3<f64>) -> Innovation<3> {
+    pub fn velocity_innovation(&mut self, y: &Vector3<f64>) -> Innovation<3> {
+        self.flush_or_poison();
         let r = self.noise.gps_vel;
         let mut out = Innovation::<3>::default();
         for i in 0..3 {
@@ -217,7 +270,8 @@ impl Kf {
     }
 
     /// Predicted barometer innovation (baro is altitude up: -pD + offset).
-    pub fn baro_innovation(&self, baro: f64) -> Innovation<1> {
+    pub fn baro_innovation(&mut self, baro: f64) -> Innovation<1> {
+        self.flush_or_poison();
         let r = self.noise.baro;
         Innovation {
             nu: [baro - (-self.x[IP + 2] + self.x[IBARO])],
@@ -253,6 +307,7 @@ impl Kf {
         if !baro.is_finite() {
             return Err(FilterError::NonFinite("baro"));
         }
+        self.flush()?;
         if !self.baro_initialised {
             self.x[IBARO] = baro + self.x[IP + 2];
             self.P[(IBARO, IBARO)] = self.P[(IP + 2, IP + 2)] + self.noise.baro * self.noise.baro;
@@ -273,6 +328,7 @@ impl Kf {
     /// Move position and velocity onto a measurement (after a long coast),
     /// keeping biases; position/velocity uncertainty reset to the sensor's.
     pub fn reset_to(&mut self, p: &Vector3<f64>, v: Option<&Vector3<f64>>) {
+        self.flush_or_poison();
         for i in 0..3 {
             self.x[IP + i] = p[i];
             if let Some(v) = v {
@@ -298,8 +354,17 @@ impl Kf {
         self.baro_initialised = false;
     }
 
+    /// Flush for a read-only query; a failure leaves `P` non-finite so the
+    /// next update reports it as an error.
+    fn flush_or_poison(&mut self) {
+        if self.flush().is_err() {
+            self.P[(0, 0)] = f64::NAN;
+        }
+    }
+
     /// One scalar update `y = hᵀx + e`, `e ~ N(0, r)`, Joseph form.
     fn scalar_update(&mut self, h: &SVector<f64, N>, y: f64, r: f64) -> Result<(), FilterError> {
+        self.flush()?;
         if !y.is_finite() {
             return Err(FilterError::NonFinite("measurement"));
         }
@@ -396,10 +461,31 @@ mod tests {
         // Constant-velocity: var(p) grows by q dt³/3 + dt² var(v).
         let noise = FilterNoise { cv_accel: 2.0, ..FilterNoise::default() };
         let mut kf = Kf::new(noise, Vector3::zeros(), Vector3::new(1.0, 0.0, 0.0), 1.0, 0.5);
-        kf.predict(1.0, None).unwrap();
+        kf.predict(0.25, None).unwrap();
+        kf.predict(0.75, None).unwrap();
+        kf.flush().unwrap();
         assert_abs_diff_eq!(kf.position()[0], 1.0, epsilon = 1e-12);
         assert_abs_diff_eq!(kf.P[(0, 0)], 1.0 + 0.25 + 4.0 / 3.0, epsilon = 1e-12);
         assert_abs_diff_eq!(kf.P[(3, 3)], 0.25 + 4.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn deferred_propagation_equals_stepwise() {
+        // With no bias random walk the accumulated transition is exact.
+        let noise = FilterNoise { accel_bias_rw: 0.0, ..FilterNoise::default() };
+        let mut a = Kf::new(noise, Vector3::zeros(), Vector3::new(3.0, 1.0, 0.0), 1.0, 0.3);
+        let mut b = a.clone();
+        for k in 0..50 {
+            let q = UnitQuaternion::from_euler_angles(0.1 * (k as f64).sin(), 0.2, 0.05 * k as f64);
+            let imu = ImuInput { f_body: Vector3::new(0.5, -0.2, -9.7), q };
+            let u = if k % 7 == 3 { None } else { Some(&imu) };
+            a.predict(0.02, u).unwrap();
+            b.predict(0.02, u).unwrap();
+            b.flush().unwrap();
+        }
+        a.flush().unwrap();
+        assert!((a.P - b.P).abs().max() < 1e-12, "max diff {}", (a.P - b.P).abs().max());
+        assert_eq!(a.x, b.x);
     }
 
     #[test]
