@@ -1,0 +1,177 @@
+// Browser test of the ground-station page (www/) in headless Debian Chromium.
+// Run from the repository root: node --test tests/browser/
+// Needs www/pkg/ (bash .ci/build) and /usr/bin/chromium; fails (never skips)
+// when either is missing.
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import http from 'node:http';
+import { readFile, mkdir, copyFile, access } from 'node:fs/promises';
+import { join, extname, normalize, dirname, sep } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { createRequire } from 'node:module';
+
+const here = dirname(fileURLToPath(import.meta.url));
+const repoRoot = join(here, '..', '..');
+const www = join(repoRoot, 'www');
+const artifacts = join(repoRoot, 'tests', 'artifacts');
+const LOITER = join(repoRoot, '..', 'shared', 'data', 'ardupilot', 'Loiter_RTL.bin');
+const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
+const { chromium } = createRequire(import.meta.url)(join(repoRoot, 'node_modules', 'playwright-core'));
+
+const MIME = {
+  '.html': 'text/html; charset=utf-8',
+  '.js': 'text/javascript; charset=utf-8',
+  '.mjs': 'text/javascript; charset=utf-8',
+  '.css': 'text/css; charset=utf-8',
+  '.wasm': 'application/wasm',
+  '.json': 'application/json',
+  '.png': 'image/png',
+  '.svg': 'image/svg+xml',
+  '.ts': 'text/plain; charset=utf-8',
+};
+
+let server, base, browser;
+
+before(async () => {
+  await access(CHROMIUM).catch(() => { throw new Error(`Chromium not found at ${CHROMIUM}: the browser test needs it (set CHROMIUM_PATH)`); });
+  await access(join(www, 'pkg', 'navguard.js')).catch(() => { throw new Error('www/pkg/ is missing: run `bash .ci/build` first'); });
+  server = http.createServer(async (req, res) => {
+    try {
+      const path = decodeURIComponent(new URL(req.url, 'http://x').pathname);
+      const file = normalize(join(www, path.endsWith('/') ? path + 'index.html' : path));
+      if (file !== www && !file.startsWith(www + sep)) throw Object.assign(new Error('outside'), { code: 'ENOENT' });
+      const body = await readFile(file);
+      res.writeHead(200, { 'content-type': MIME[extname(file)] || 'application/octet-stream', 'cache-control': 'no-store' });
+      res.end(body);
+    } catch {
+      res.writeHead(404, { 'content-type': 'text/plain' });
+      res.end('not found');
+    }
+  });
+  await new Promise((r) => server.listen(0, '127.0.0.1', r));
+  base = `http://127.0.0.1:${server.address().port}/`;
+  browser = await chromium.launch({
+    executablePath: CHROMIUM,
+    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-component-update', '--disable-sync', '--no-first-run'],
+  });
+  await mkdir(artifacts, { recursive: true });
+});
+
+after(async () => {
+  if (browser) await browser.close();
+  if (server) await new Promise((r) => server.close(r));
+});
+
+async function openPage() {
+  const page = await browser.newPage({ viewport: { width: 1600, height: 1300 }, acceptDownloads: true });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(`pageerror: ${e.message}`));
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(`console.error: ${m.text()}`); });
+  page.on('requestfailed', (r) => errors.push(`requestfailed: ${r.url()} ${r.failure()?.errorText}`));
+  page.on('response', (r) => { if (r.status() >= 400) errors.push(`HTTP ${r.status()}: ${r.url()}`); });
+  await page.goto(base);
+  // the worker has loaded the wasm module once the scenario list is filled
+  await page.waitForFunction(() => !document.querySelector('#scenario').disabled, null, { timeout: 30000 });
+  return { page, errors };
+}
+
+async function waitDone(page) {
+  await page.waitForFunction(() => document.body.dataset.state === 'done' || !document.querySelector('#error').hidden, null, { timeout: 120000 });
+  const err = await page.$eval('#error', (e) => (e.hidden ? '' : e.textContent));
+  assert.equal(err, '', `page showed an error: ${err}`);
+}
+
+const faultRows = (page) => page.$$eval('#faults tbody tr[data-index]', (trs) => trs.map((tr) => ({
+  start: Number(tr.dataset.start), end: Number(tr.dataset.end), kind: tr.dataset.kind,
+})));
+
+async function assertPlots(page) {
+  const sizes = await page.$$eval('.uplot canvas', (cs) => cs.map((c) => [c.width, c.height]));
+  assert.ok(sizes.length >= 5, `expected at least 5 uPlot canvases, found ${sizes.length}`);
+  for (const [w, h] of sizes) assert.ok(w > 0 && h > 0, `canvas has zero size: ${w}x${h}`);
+  const ids = await page.$$eval('.plot-host', (hs) => hs.filter((h) => h.querySelector('.uplot canvas')).map((h) => h.id));
+  for (const id of ['plot-track', 'plot-band', 'plot-f', 'plot-rc', 'plot-gps']) assert.ok(ids.includes(id), `plot ${id} not rendered`);
+}
+
+test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots drawn, no errors', async () => {
+  const { page, errors } = await openPage();
+  try {
+    await page.setInputFiles('#file', LOITER);
+    await waitDone(page);
+    const summary = await page.textContent('#summary');
+    assert.match(summary, /ArduPilot DataFlash/);
+
+    const rows = await faultRows(page);
+    assert.ok(rows.length > 0, 'fault table is empty');
+    // acceptance criterion: the real GPS outage at boot time ~97–104 s
+    const hit = rows.filter((r) => r.start <= 104 && r.end >= 97);
+    assert.ok(hit.length > 0, `no fault interval overlaps the GPS outage 97–104 s; intervals: ${JSON.stringify(rows)}`);
+
+    await assertPlots(page);
+
+    // clicking the row zooms every time plot to it (± margin)
+    const idx = await page.$$eval('#faults tbody tr[data-index]', (trs) => trs.findIndex((tr) => Number(tr.dataset.start) <= 104 && Number(tr.dataset.end) >= 97));
+    await page.click(`#faults tbody tr[data-index="${idx}"]`);
+    const scales = await page.evaluate(() => window.navguard.plots.map((u) => [u.scales.x.min, u.scales.x.max]));
+    const target = hit[0];
+    for (const [min, max] of scales) {
+      assert.ok(min <= target.start && max >= target.end && max - min < 60, `plot not zoomed to the interval: [${min}, ${max}]`);
+    }
+    await page.screenshot({ path: join(artifacts, 'page-zoomed.png'), fullPage: true });
+
+    // double-click resets the zoom on every plot
+    const box = await page.$eval('#plot-f .u-over', (e) => { const r = e.getBoundingClientRect(); return { x: r.x + r.width / 2, y: r.y + r.height / 2 }; });
+    await page.mouse.dblclick(box.x, box.y);
+    const reset = await page.evaluate(() => window.navguard.plots.map((u) => u.scales.x.max - u.scales.x.min));
+    for (const span of reset) assert.ok(span > 200, `double-click did not reset the zoom (span ${span} s)`);
+    await page.mouse.move(5, 5);
+
+    // per-sample CSV export
+    const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#export-csv')]);
+    const csv = await readFile(await dl.path(), 'utf8');
+    assert.equal(csv.split('\n')[0], 't,status,f,r,c,kind');
+    assert.ok(csv.split('\n').length > 1000);
+    const [dj] = await Promise.all([page.waitForEvent('download'), page.click('#export-json')]);
+    const rep = JSON.parse(await readFile(await dj.path(), 'utf8'));
+    assert.equal(rep.format, 'dataflash');
+    assert.equal(rep.faults.length, rows.length);
+
+    const shot = join(artifacts, 'page.png');
+    await page.screenshot({ path: shot, fullPage: true });
+    await copyFile(shot, join(www, 'screenshot.png'));
+
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+test('simulated "paper" scenario: outage intervals near 30–40 s; config change reruns', async () => {
+  const { page, errors } = await openPage();
+  try {
+    await page.selectOption('#scenario', 'paper');
+    await page.fill('#seed', '1');
+    await page.click('#sim-run');
+    await waitDone(page);
+    const rows = await faultRows(page);
+    assert.ok(rows.some((r) => r.start >= 28 && r.start <= 42 && r.end >= 30 && r.start <= 40),
+      `no interval near 30–40 s: ${JSON.stringify(rows)}`);
+    await assertPlots(page);
+    const summary = await page.textContent('#summary');
+    assert.match(summary, /navlog CSV/);
+    assert.match(summary, /Metrics against labels/);
+
+    // changing the threshold reruns the audit
+    const renders = await page.evaluate(() => window.navguard.renders);
+    await page.fill('#config [name=threshold]', '0.9');
+    await page.waitForFunction((n) => window.navguard.renders > n && document.body.dataset.state === 'done', renders, { timeout: 60000 });
+    const cfg = await page.evaluate(() => window.navguard.config);
+    assert.equal(cfg.threshold, 0.9);
+    const legend = await page.textContent('#plot-f .u-legend');
+    assert.match(legend, /threshold 0\.9/);
+    await page.screenshot({ path: join(artifacts, 'page-sim.png'), fullPage: true });
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});

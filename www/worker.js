@@ -1,0 +1,228 @@
+// navguard audit worker: reads the log, parses it, runs the detector and
+// prepares compact plot data, so the page never blocks. Messages in:
+//   {type:'file', file: File, config}      read + parse + audit
+//   {type:'sim', name, seed, config}       simulate + parse + audit
+//   {type:'rerun', config}                 audit the cached log again
+//   {type:'csv'}                           per-sample CSV of the last audit
+// Messages out: ready | progress | result | csv | error (each with the job id).
+import init, { auditBytes, readLog, simulate, scenarioNames, Detector, version } from './pkg/navguard.js';
+
+const ready = init();
+let bytes = null;     // Uint8Array of the current log
+let log = null;       // readLog() result for it
+let source = null;    // {kind:'file'|'sim', name, size}
+let last = null;      // last auditBytes() result
+
+const post = (msg, transfer) => self.postMessage(msg, transfer || []);
+const progress = (id, stage, frac, detail) => post({ type: 'progress', id, stage, frac, detail });
+// Let the progress message leave before a long synchronous wasm call.
+const yieldNow = () => new Promise((r) => setTimeout(r, 0));
+
+self.onmessage = async (ev) => {
+  const msg = ev.data;
+  const id = msg.id;
+  try {
+    await ready;
+    if (msg.type === 'hello') {
+      const d = new Detector(undefined);
+      const defaults = d.config();
+      d.free();
+      post({ type: 'ready', id, scenarios: scenarioNames(), defaults, version: version() });
+      return;
+    }
+    if (msg.type === 'file') {
+      bytes = await readFile(id, msg.file);
+      source = { kind: 'file', name: msg.file.name, size: msg.file.size };
+      await parse(id);
+    } else if (msg.type === 'sim') {
+      progress(id, 'reading', 0, `simulating “${msg.name}” (seed ${msg.seed})`);
+      await yieldNow();
+      const csv = simulate(msg.name, Number(msg.seed));
+      bytes = new TextEncoder().encode(csv);
+      source = { kind: 'sim', name: `${msg.name}-seed${msg.seed}.csv`, scenario: msg.name, seed: Number(msg.seed), size: bytes.length };
+      progress(id, 'reading', 1, `simulated ${fmtBytes(bytes.length)}`);
+      await parse(id);
+    } else if (msg.type === 'rerun') {
+      if (!bytes) throw new Error('no log loaded');
+    } else if (msg.type === 'csv') {
+      if (!last) throw new Error('no audit result yet');
+      const blob = perSampleCsv(last.columns);
+      post({ type: 'csv', id, blob });
+      return;
+    } else {
+      throw new Error(`unknown message ${msg.type}`);
+    }
+    progress(id, 'detecting', 0, `running the detector over ${log.rows.toLocaleString('en-US')} samples`);
+    await yieldNow();
+    const t0 = performance.now();
+    last = auditBytes(bytes, msg.config || undefined);
+    const auditMs = performance.now() - t0;
+    progress(id, 'detecting', 1, 'preparing plot data');
+    await yieldNow();
+    const plot = preparePlots(log, last);
+    post({ type: 'result', id, source, report: last.report, plot, auditMs, logMeta: { format: log.format, rows: log.rows, columns: Object.keys(log.columns) } });
+  } catch (e) {
+    post({ type: 'error', id, message: e && e.message ? e.message : String(e) });
+  }
+};
+
+async function readFile(id, file) {
+  const total = file.size;
+  const out = new Uint8Array(total);
+  let got = 0;
+  let lastPost = 0;
+  progress(id, 'reading', 0, `0 / ${fmtBytes(total)}`);
+  const reader = file.stream().getReader();
+  for (;;) {
+    const { done, value } = await reader.read();
+    if (done) break;
+    if (got + value.length > total) throw new Error('file grew while reading');
+    out.set(value, got);
+    got += value.length;
+    const now = performance.now();
+    if (now - lastPost > 50 || got === total) {
+      lastPost = now;
+      progress(id, 'reading', total ? got / total : 1, `${fmtBytes(got)} / ${fmtBytes(total)}`);
+    }
+  }
+  return got === total ? out : out.subarray(0, got);
+}
+
+async function parse(id) {
+  progress(id, 'parsing', 0, `recognising and parsing ${fmtBytes(bytes.length)}`);
+  await yieldNow();
+  log = null;
+  last = null;
+  log = readLog(bytes);
+  progress(id, 'parsing', 1, `${log.format}: ${log.rows.toLocaleString('en-US')} samples`);
+}
+
+function fmtBytes(n) {
+  if (n < 1024) return `${n} B`;
+  if (n < 1024 * 1024) return `${(n / 1024).toFixed(1)} KiB`;
+  return `${(n / 1048576).toFixed(1)} MiB`;
+}
+
+// ---------------------------------------------------------------- plot data
+
+const R_EARTH = 6378137.0; // WGS-84 equatorial radius, m
+
+/** Compact, exact data for stepped plots: only rows where a value changes, plus
+ *  null rows that break lines across logging gaps. Plain arrays (null = gap). */
+function preparePlots(log, audit) {
+  const cols = log.columns;
+  const ac = audit.columns;
+  const t = ac.t;
+  const n = t.length;
+  const gaps = audit.report.dataGaps || [];
+  const tMin = n ? t[0] : 0;
+  const tMax = n ? t[n - 1] : 1;
+  const inGapAfter = makeGapTest(gaps);
+
+  // Indicators and kind, change points only.
+  const ind = { t: [], f: [], r: [], c: [], status: [] };
+  for (let i = 0; i < n; i++) {
+    const changed = i === 0 || i === n - 1 || ac.f[i] !== ac.f[i - 1] || ac.r[i] !== ac.r[i - 1] || ac.c[i] !== ac.c[i - 1] || ac.status[i] !== ac.status[i - 1];
+    if (i > 0 && inGapAfter(t[i - 1], t[i])) {
+      // hold the last values up to the gap's start, then break the line
+      if (ind.t[ind.t.length - 1] !== t[i - 1]) {
+        ind.t.push(t[i - 1]); ind.f.push(num(ac.f[i - 1])); ind.r.push(num(ac.r[i - 1])); ind.c.push(num(ac.c[i - 1])); ind.status.push(ac.status[i - 1]);
+      }
+      pushRow(ind, (t[i - 1] + t[i]) / 2, null);
+      ind.t.push(t[i]); ind.f.push(num(ac.f[i])); ind.r.push(num(ac.r[i])); ind.c.push(num(ac.c[i])); ind.status.push(ac.status[i]);
+      continue;
+    }
+    if (!changed) continue;
+    ind.t.push(t[i]);
+    ind.f.push(num(ac.f[i]));
+    ind.r.push(num(ac.r[i]));
+    ind.c.push(num(ac.c[i]));
+    ind.status.push(ac.status[i]);
+  }
+
+  // Kind runs: [start, end, kind].
+  const runs = [];
+  let k0 = n ? ac.kind[0] : 0;
+  let s0 = tMin;
+  for (let i = 1; i < n; i++) {
+    const k = ac.kind[i];
+    const gap = inGapAfter(t[i - 1], t[i]);
+    if (k !== k0 || gap) {
+      runs.push([s0, gap ? t[i - 1] : t[i], k0]);
+      k0 = k;
+      s0 = t[i];
+    }
+  }
+  if (n) runs.push([s0, tMax, k0]);
+
+  // GPS quality: rows that carry any of sats / eph / fix.
+  const sats = cols.sats, eph = cols.eph, fix = cols.fix;
+  const gq = { t: [], sats: [], eph: [], fix: [] };
+  if (sats || eph || fix) {
+    let prevT = null;
+    for (let i = 0; i < n; i++) {
+      const s = sats ? sats[i] : NaN, e = eph ? eph[i] : NaN, f = fix ? fix[i] : NaN;
+      if (Number.isNaN(s) && Number.isNaN(e) && Number.isNaN(f)) continue;
+      if (prevT !== null && inGapAfter(prevT, t[i])) pushRow(gq, (prevT + t[i]) / 2, null);
+      gq.t.push(t[i]);
+      gq.sats.push(num(s));
+      gq.eph.push(num(e));
+      gq.fix.push(num(f));
+      prevT = t[i];
+    }
+  }
+
+  // Track in local N/E metres around the first fix (or pn/pe as given).
+  const tr = { t: [], n: [], e: [], kind: [], status: [] };
+  const lat = cols.lat, lon = cols.lon, pn = cols.pn, pe = cols.pe;
+  let lat0 = NaN, lon0 = NaN, cosLat0 = 1;
+  for (let i = 0; i < n; i++) {
+    let N, E;
+    if (lat && lon && !Number.isNaN(lat[i]) && !Number.isNaN(lon[i])) {
+      if (Number.isNaN(lat0)) { lat0 = lat[i]; lon0 = lon[i]; cosLat0 = Math.cos(lat0 * Math.PI / 180); }
+      N = (lat[i] - lat0) * Math.PI / 180 * R_EARTH;
+      E = (lon[i] - lon0) * Math.PI / 180 * R_EARTH * cosLat0;
+    } else if (pn && pe && !Number.isNaN(pn[i]) && !Number.isNaN(pe[i])) {
+      N = pn[i];
+      E = pe[i];
+    } else continue;
+    if (fix && fix[i] < 2) continue; // a row that says "no fix" is not a position
+    tr.t.push(t[i]);
+    tr.n.push(N);
+    tr.e.push(E);
+    tr.kind.push(ac.kind[i]);
+    tr.status.push(ac.status[i]);
+  }
+
+  // Labels, for the summary (ground truth present?).
+  const hasLabel = !!cols.label;
+  return { tMin, tMax, ind, runs, gq, tr, anchor: Number.isNaN(lat0) ? null : [lat0, lon0], hasLabel, gaps };
+}
+
+function pushRow(o, t, v) {
+  for (const k of Object.keys(o)) o[k].push(k === 't' ? t : v);
+}
+function num(x) { return Number.isFinite(x) ? x : null; }
+
+function makeGapTest(gaps) {
+  // true when the step (a, b] crosses a reported data gap
+  return (a, b) => {
+    for (const g of gaps) if (a <= g.start + 1e-9 && b >= g.end - 1e-9 && b > a) return true;
+    return false;
+  };
+}
+
+function perSampleCsv(c) {
+  const parts = ['t,status,f,r,c,kind\n'];
+  const n = c.t.length;
+  const CH = 20000;
+  for (let i0 = 0; i0 < n; i0 += CH) {
+    let s = '';
+    const i1 = Math.min(n, i0 + CH);
+    for (let i = i0; i < i1; i++) {
+      s += `${c.t[i]},${c.status[i]},${c.f[i]},${c.r[i]},${c.c[i]},${c.kind[i]}\n`;
+    }
+    parts.push(s);
+  }
+  return new Blob(parts, { type: 'text/csv' });
+}
