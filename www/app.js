@@ -215,6 +215,7 @@ function render(m) {
   state.result = m;
   state.config = readConfig();
   state.renders = (state.renders || 0) + 1;
+  document.body.classList.add('has-result');
   state.selected = -1;
   renderSummary(m);
   renderTable(m.report);
@@ -242,8 +243,8 @@ function renderSummary(m) {
     ['Format', `${esc(FORMAT_NAME[r.format] || r.format)}${meta.get('firmware') ? ` <span class="muted">(${esc(meta.get('firmware'))})</span>` : ''}`],
     ['Samples', `${r.rows.toLocaleString('en-US')} <span class="muted">(${(src.size / 1048576).toFixed(2)} MiB)</span>`],
     ['Duration', `${fmt(r.durationS, 1)} s <span class="muted">(t ${fmt(m.plot.tMin, 1)}–${fmt(m.plot.tMax, 1)} s)</span>`],
-    ['GPS rate', `${fmt(r.gpsRateHz, 1)} Hz <span class="muted">(${r.gpsEpochs.toLocaleString('en-US')} epochs)</span>`],
-    ['IMU rate', `${fmt(r.imuRateHz, 1)} Hz`],
+    ['GPS rate', r.gpsEpochs ? `${fmt(r.gpsRateHz, 1)} Hz <span class="muted">(${r.gpsEpochs.toLocaleString('en-US')} epochs)</span>` : '— <span class="muted">(no GPS epochs)</span>'],
+    ['IMU rate', r.imuRateHz > 0 ? `${fmt(r.imuRateHz, 1)} Hz` : '— <span class="muted">(no IMU)</span>'],
     ['GPS availability', r.gpsAvailable ? `${pct(r.gpsFixFraction)} <span class="muted">of epochs with a fix</span>` : '<span class="bad">GPS unavailable</span>'],
     ['Flagged GPS epochs', pct(r.flaggedGpsEpochFraction)],
     ['Fault intervals', `<span class="tag fault">${counts.residual} residual</span> <span class="tag outage">${counts.gps_outage} outage</span> <span class="muted">${fmt(faultTime, 1)} s total</span>`],
@@ -281,7 +282,9 @@ function renderTable(report) {
   tb.textContent = '';
   $('#fault-count').textContent = `(${report.faults.length})`;
   if (!report.faults.length) {
-    tb.innerHTML = '<tr class="empty"><td colspan="8">No fault intervals detected.</td></tr>';
+    tb.innerHTML = report.gpsAvailable
+      ? '<tr class="empty"><td colspan="8">No fault intervals detected.</td></tr>'
+      : '<tr class="empty"><td colspan="8"><span class="bad">GPS unavailable in this log</span>: no residual-based verdicts could be made.</td></tr>';
     return;
   }
   report.faults.forEach((f, i) => {
@@ -412,6 +415,7 @@ function baseTimeOpts(title, height, extra) {
     cursor: {
       sync: { key: SYNC_KEY, scales: ['x', null], setSeries: false },
       drag: { x: true, y: false, setScale: true },
+      y: false,
       focus: { prox: 30 },
       ...(extra.cursor || {}),
     },
@@ -426,9 +430,8 @@ function baseTimeOpts(title, height, extra) {
         updateTrackWindow(min, max);
       }],
       setCursor: [(u) => {
-        const idx = u.cursor.idx;
-        const t = idx == null ? null : u.data[0][idx];
-        moveTrackMarker(t);
+        const left = u.cursor.left;
+        moveTrackMarker(left == null || left < 0 ? null : u.posToVal(left, 'x'));
       }],
       ...(extra.hooks || {}),
     },
@@ -453,6 +456,18 @@ function pad(plot, cols) {
 
 const stepped = uPlot.paths.stepped({ align: 1 });
 const pointsPath = uPlot.paths.points();
+// Polyline in data order for the x/y track (uPlot's linear() assumes sorted x
+// and merges points that share a pixel column, which distorts a 2-D path).
+function trackPath(u, si) {
+  const [xs, ys] = u.data[si];
+  const p = new Path2D();
+  for (let i = 0; i < xs.length; i++) {
+    const x = u.valToPos(xs[i], 'x', true);
+    const y = u.valToPos(ys[i], 'y', true);
+    if (i === 0) p.moveTo(x, y); else p.lineTo(x, y);
+  }
+  return { stroke: p, fill: null, clip: null, band: null, gaps: null, flags: 0 };
+}
 
 function renderPlots(m, keepX) {
   destroyPlots();
@@ -479,7 +494,8 @@ function renderPlots(m, keepX) {
   fData.push(fData[0].map(() => thr));
   const fPlot = new uPlot({
     ...baseTimeOpts('F', 190, {
-      scales: { f: { range: (u, lo, hi) => [Math.min(-0.1, lo ?? 0), Math.max(1.2, (hi ?? 1) + 0.05)] } },
+      // clamp: a wild ANFIS extrapolation must not squash the decision region
+      scales: { f: { range: (u, lo, hi) => [Math.max(-0.6, Math.min(-0.1, lo ?? 0)), Math.min(1.6, Math.max(1.2, (hi ?? 1) + 0.05))] } },
       hooks: { drawAxes: [shadeHook(false)] },
     }),
     series: [
@@ -539,7 +555,7 @@ function renderTrack(p) {
   const host = $('#plot-track');
   const tr = p.tr;
   const width = Math.max(260, host.clientWidth || 400);
-  const height = Math.round(Math.min(width, 560));
+  const height = Math.round(Math.min(width, 480));
   const split = (pred) => {
     const e = [], n = [];
     for (let i = 0; i < tr.t.length; i++) if (pred(i)) { e.push(tr.e[i]); n.push(tr.n[i]); }
@@ -575,11 +591,11 @@ function renderTrack(p) {
     scales: { x: { time: false, range: () => xr }, y: { range: () => yr } },
     series: [
       {},
-      { label: 'track', facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }], stroke: COLORS.track, width: 1, points: { show: false } },
+      { label: 'track', facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }], stroke: COLORS.track, width: 1, paths: trackPath, points: { show: false } },
       { ...pts(COLORS.normal, 3), label: 'normal', facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }] },
       { ...pts(COLORS.fault, 5), label: 'residual fault', facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }] },
       { ...pts(COLORS.outage, 5), label: 'GPS outage', facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }] },
-      { label: 'zoomed span', facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }], stroke: '#111827', width: 2.5, points: { show: false } },
+      { label: 'zoomed span', facets: [{ scale: 'x', auto: false }, { scale: 'y', auto: false }], stroke: '#111827', width: 2.5, paths: trackPath, points: { show: false } },
     ],
     axes: [
       { scale: 'x', label: 'East (m)', labelSize: 18, size: 36, stroke: '#374151', grid: { stroke: '#eef0f3' }, ticks: { stroke: '#d1d5db', size: 4 } },
