@@ -639,6 +639,11 @@ function updateTrackWindow(min, max) {
   const u = state.track;
   if (!u || !state.result) return;
   const { tr, tMin, tMax } = state.result.plot;
+  if (min <= tMin && max >= tMax && state.selected >= 0) {
+    // zoom reset: the selected interval is no longer what is shown
+    state.selected = -1;
+    for (const tr of $('#faults tbody').children) tr.classList.remove('selected');
+  }
   const e = [], n = [];
   if (min > tMin || max < tMax) {
     for (let i = 0; i < tr.t.length; i++) if (tr.t[i] >= min && tr.t[i] <= max) { e.push(tr.e[i]); n.push(tr.n[i]); }

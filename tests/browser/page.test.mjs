@@ -175,3 +175,30 @@ test('simulated "paper" scenario: outage intervals near 30–40 s; config change
     await page.close();
   }
 });
+
+test('drag and drop a navlog CSV onto the page', async () => {
+  const { page, errors } = await openPage();
+  try {
+    // 60 s of 5 Hz GPS-only flight heading north at 5 m/s, no faults injected
+    const lines = ['t,lat,lon,alt,vn,ve,vd,fix,sats,eph'];
+    for (let i = 0; i <= 300; i++) {
+      const t = i * 0.2;
+      lines.push(`${t.toFixed(1)},${(31.94 + (5 * t) / 111320).toFixed(9)},118.79,50,5,0,0,3,11,0.9`);
+    }
+    await page.evaluate((text) => {
+      const dt = new DataTransfer();
+      dt.items.add(new File([text], 'dropped.csv', { type: 'text/csv' }));
+      window.dispatchEvent(new DragEvent('dragenter', { dataTransfer: dt, bubbles: true, cancelable: true }));
+      window.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    }, lines.join('\n') + '\n');
+    await waitDone(page);
+    const summary = await page.textContent('#summary');
+    assert.match(summary, /dropped\.csv/);
+    assert.match(summary, /navlog CSV/);
+    assert.equal(await page.$eval('#drop', (d) => d.hidden), true);
+    await assertPlots(page);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
