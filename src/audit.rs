@@ -1,5 +1,7 @@
 //! Whole-log audit: run the detector over a log and summarise (contract §3).
 
+use core::borrow::Borrow;
+
 use serde::Serialize;
 
 use crate::config::Config;
@@ -68,107 +70,181 @@ pub struct Columns {
     pub r: Vec<f64>,
     pub c: Vec<f64>,
     pub kind: Vec<u8>,
+    /// Residuals per axis (see [`Detector::residuals`]), NaN where none.
+    pub resid: [Vec<f64>; 7],
 }
+
+/// Names of the residual columns, in [`Columns::resid`] order.
+pub const RESID_NAMES: [&str; 7] = ["rPn", "rPe", "rPd", "rVn", "rVe", "rVd", "rBaro"];
 
 const MAX_LISTED: usize = 1000;
 
-/// Run the detector over a log. Rows that fail validation are skipped with a
-/// warning (a log is audited, not rejected, for a few bad rows).
-pub fn audit(log: &LogData, cfg: &Config) -> Result<(Report, Columns), String> {
-    let mut det = Detector::new(cfg.clone())?;
-    let n = log.samples.len();
-    let mut cols = Columns {
-        t: Vec::with_capacity(n),
-        status: Vec::with_capacity(n),
-        f: Vec::with_capacity(n),
-        r: Vec::with_capacity(n),
-        c: Vec::with_capacity(n),
-        kind: Vec::with_capacity(n),
-    };
-    let mut warnings = log.warnings.clone();
-    let mut bad_rows = 0u64;
-    let mut faults: Vec<FaultInterval> = vec![];
-    let mut open: Option<FaultInterval> = None;
-    let mut gaps = vec![];
-    let mut last_t: Option<f64> = None;
-    let (mut gps_reports, mut gps_fixes, mut flagged_epochs) = (0u64, 0u64, 0u64);
-    let mut labels = Vec::with_capacity(n);
-    let mut any_label = false;
-    for (i, s) in log.samples.iter().enumerate() {
-        if let Err(e) = det.validate(s, i as u64) {
-            bad_rows += 1;
-            if bad_rows <= 5 {
-                warnings.push(format!("skipped bad row: {e}"));
-            }
-            continue;
-        }
-        if let Some(lt) = last_t {
-            if s.t - lt > cfg.data_gap && gaps.len() < MAX_LISTED {
-                gaps.push(Gap { start: lt, end: s.t });
-            }
-        }
-        last_t = Some(s.t);
-        if s.has_position() || !s.fix.is_nan() {
-            gps_reports += 1;
-            gps_fixes += s.has_fix() as u64;
-        }
-        let o = det.push_valid(s);
-        if o.gps_epoch && o.status == 1 {
-            flagged_epochs += 1;
-        }
-        track(&mut open, &mut faults, &o, &det);
-        cols.t.push(o.t);
-        cols.status.push(o.status);
-        cols.f.push(o.f);
-        cols.r.push(o.r);
-        cols.c.push(o.c);
-        cols.kind.push(o.kind);
-        labels.push(s.label);
-        any_label |= !s.label.is_nan();
+/// An audit in progress: feed it rows a slice at a time ([`AuditRun::step`])
+/// so a front end can report progress, then [`AuditRun::finish`].
+pub struct AuditRun<L: Borrow<LogData>> {
+    log: L,
+    cfg: Config,
+    det: Detector,
+    next: usize,
+    cols: Columns,
+    labels: Vec<f64>,
+    any_label: bool,
+    warnings: Vec<String>,
+    bad_rows: u64,
+    faults: Vec<FaultInterval>,
+    open: Option<FaultInterval>,
+    gaps: Vec<Gap>,
+    last_t: Option<f64>,
+    gps_reports: u64,
+    gps_fixes: u64,
+    flagged_epochs: u64,
+}
+
+impl<L: Borrow<LogData>> AuditRun<L> {
+    /// Start an audit of `log` (owned or borrowed).
+    pub fn new(log: L, cfg: &Config) -> Result<Self, String> {
+        let n = log.borrow().samples.len();
+        let warnings = log.borrow().warnings.clone();
+        Ok(AuditRun {
+            log,
+            cfg: cfg.clone(),
+            det: Detector::new(cfg.clone())?,
+            next: 0,
+            cols: Columns {
+                t: Vec::with_capacity(n),
+                status: Vec::with_capacity(n),
+                f: Vec::with_capacity(n),
+                r: Vec::with_capacity(n),
+                c: Vec::with_capacity(n),
+                kind: Vec::with_capacity(n),
+                resid: core::array::from_fn(|_| Vec::with_capacity(n)),
+            },
+            labels: Vec::with_capacity(n),
+            any_label: false,
+            warnings,
+            bad_rows: 0,
+            faults: vec![],
+            open: None,
+            gaps: vec![],
+            last_t: None,
+            gps_reports: 0,
+            gps_fixes: 0,
+            flagged_epochs: 0,
+        })
     }
-    if let Some(iv) = open.take() {
-        faults.push(iv);
-    }
-    if bad_rows > 5 {
-        warnings.push(format!("{bad_rows} bad rows skipped in all"));
-    }
-    let st = det.stats();
-    if st.gps_epochs == 0 {
-        warnings.push(if log.missing.iter().any(|m| m == "gps") {
-            "GPS unavailable: the log has no GPS data; no residual-based verdicts were made".into()
+
+    /// Fraction of rows processed, in [0, 1].
+    pub fn progress(&self) -> f64 {
+        let n = self.log.borrow().samples.len();
+        if n == 0 {
+            1.0
         } else {
-            "GPS unavailable: no valid fix in the whole log; no residual-based verdicts were made".into()
-        });
+            self.next as f64 / n as f64
+        }
     }
-    for g in &gaps {
-        warnings.push(format!("data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)", g.start, g.end));
+
+    pub fn done(&self) -> bool {
+        self.next >= self.log.borrow().samples.len()
     }
-    let duration = match (cols.t.first(), cols.t.last()) {
-        (Some(a), Some(b)) => b - a,
-        _ => 0.0,
-    };
-    let active = (duration - gaps.iter().map(|g| g.end - g.start).sum::<f64>()).max(1e-9);
-    let metrics = any_label.then(|| metrics::compute(&cols.t, &labels, &cols.status));
-    faults.truncate(MAX_LISTED);
-    let report = Report {
-        format: log.format,
-        rows: cols.t.len(),
-        duration_s: duration,
-        gps_epochs: st.gps_epochs,
-        gps_rate_hz: st.gps_epochs as f64 / active,
-        imu_rate_hz: st.imu_rows as f64 / active,
-        gps_available: st.gps_epochs > 0,
-        gps_fix_fraction: if gps_reports > 0 { gps_fixes as f64 / gps_reports as f64 } else { 0.0 },
-        flagged_gps_epoch_fraction: if st.gps_epochs > 0 { flagged_epochs as f64 / st.gps_epochs as f64 } else { 0.0 },
-        faults,
-        data_gaps: gaps,
-        missing: log.missing.clone(),
-        warnings,
-        meta: log.meta.clone(),
-        metrics,
-        stats: st,
-    };
-    Ok((report, cols))
+
+    /// Process up to `max_rows` more rows. Rows that fail validation are
+    /// skipped with a warning: a log is audited, not rejected, for a few bad rows.
+    pub fn step(&mut self, max_rows: usize) {
+        let log = self.log.borrow();
+        let end = self.next.saturating_add(max_rows).min(log.samples.len());
+        for (i, s) in log.samples.iter().enumerate().take(end).skip(self.next) {
+            if let Err(e) = self.det.validate(s, i as u64) {
+                self.bad_rows += 1;
+                if self.bad_rows <= 5 {
+                    self.warnings.push(format!("skipped bad row: {e}"));
+                }
+                continue;
+            }
+            if let Some(lt) = self.last_t {
+                if s.t - lt > self.cfg.data_gap && self.gaps.len() < MAX_LISTED {
+                    self.gaps.push(Gap { start: lt, end: s.t });
+                }
+            }
+            self.last_t = Some(s.t);
+            if s.has_position() || !s.fix.is_nan() {
+                self.gps_reports += 1;
+                self.gps_fixes += s.has_fix() as u64;
+            }
+            let o = self.det.push_valid(s);
+            if o.gps_epoch && o.status == 1 {
+                self.flagged_epochs += 1;
+            }
+            track(&mut self.open, &mut self.faults, &o, &self.det);
+            let c = &mut self.cols;
+            c.t.push(o.t);
+            c.status.push(o.status);
+            c.f.push(o.f);
+            c.r.push(o.r);
+            c.c.push(o.c);
+            c.kind.push(o.kind);
+            for (k, v) in self.det.residuals().iter().enumerate() {
+                c.resid[k].push(*v);
+            }
+            self.labels.push(s.label);
+            self.any_label |= !s.label.is_nan();
+        }
+        self.next = end;
+    }
+
+    /// Run what is left and build the report.
+    pub fn finish(mut self) -> (Report, Columns) {
+        self.step(usize::MAX);
+        let AuditRun { log: log_owner, det, cols, labels, any_label, mut warnings, bad_rows, mut faults, mut open, gaps, gps_reports, gps_fixes, flagged_epochs, .. } = self;
+        let log = log_owner.borrow();
+        if let Some(iv) = open.take() {
+            faults.push(iv);
+        }
+        if bad_rows > 5 {
+            warnings.push(format!("{bad_rows} bad rows skipped in all"));
+        }
+        let st = det.stats();
+        if st.gps_epochs == 0 {
+            warnings.push(if log.missing.iter().any(|m| m == "gps") {
+                "GPS unavailable: the log has no GPS data; no residual-based verdicts were made".into()
+            } else {
+                "GPS unavailable: no valid fix in the whole log; no residual-based verdicts were made".into()
+            });
+        }
+        for g in &gaps {
+            warnings.push(format!("data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)", g.start, g.end));
+        }
+        let duration = match (cols.t.first(), cols.t.last()) {
+            (Some(a), Some(b)) => b - a,
+            _ => 0.0,
+        };
+        let active = (duration - gaps.iter().map(|g| g.end - g.start).sum::<f64>()).max(1e-9);
+        let metrics = any_label.then(|| metrics::compute(&cols.t, &labels, &cols.status));
+        faults.truncate(MAX_LISTED);
+        let report = Report {
+            format: log.format,
+            rows: cols.t.len(),
+            duration_s: duration,
+            gps_epochs: st.gps_epochs,
+            gps_rate_hz: st.gps_epochs as f64 / active,
+            imu_rate_hz: st.imu_rows as f64 / active,
+            gps_available: st.gps_epochs > 0,
+            gps_fix_fraction: if gps_reports > 0 { gps_fixes as f64 / gps_reports as f64 } else { 0.0 },
+            flagged_gps_epoch_fraction: if st.gps_epochs > 0 { flagged_epochs as f64 / st.gps_epochs as f64 } else { 0.0 },
+            faults,
+            data_gaps: gaps,
+            missing: log.missing.clone(),
+            warnings,
+            meta: log.meta.clone(),
+            metrics,
+            stats: st,
+        };
+        (report, cols)
+    }
+}
+
+/// Run the detector over a whole log.
+pub fn audit(log: &LogData, cfg: &Config) -> Result<(Report, Columns), String> {
+    Ok(AuditRun::new(log, cfg)?.finish())
 }
 
 fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Output, det: &Detector) {

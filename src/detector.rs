@@ -286,6 +286,11 @@ pub struct Detector {
     last_fix_t: Option<f64>,
     fix_seen: bool,
     gps_dt: f64,
+    /// Mean absolute deviation of the GPS interval, s (receiver jitter).
+    gps_jitter: f64,
+    /// This row's residuals (pos N/E/D m, vel N/E/D m/s, baro m); NaN where
+    /// not computed on this row.
+    resid: [f64; 7],
     prev_pos: Vector3<f64>,
     prev_vel: Vector3<f64>,
     prev_baro_h: Option<f64>,
@@ -336,6 +341,8 @@ impl Detector {
             last_fix_t: None,
             fix_seen: false,
             gps_dt: 0.2,
+            gps_jitter: 0.0,
+            resid: [f64::NAN; 7],
             prev_pos: Vector3::zeros(),
             prev_vel: Vector3::zeros(),
             prev_baro_h: None,
@@ -385,6 +392,12 @@ impl Detector {
         self.kf.as_ref().map(|k| k.position())
     }
 
+    /// Residuals computed on the last pushed row: GPS position N/E/D (m),
+    /// GPS velocity N/E/D (m/s), baro (m); NaN where that row had none.
+    pub fn residuals(&self) -> [f64; 7] {
+        self.resid
+    }
+
     /// Latest indicators (per-group detail included).
     pub fn indicators(&self) -> Indicators {
         self.last_ind
@@ -410,6 +423,7 @@ impl Detector {
     /// Process a row already validated (see [`Detector::validate`]).
     pub fn push_valid(&mut self, s: &Sample) -> Output {
         self.stats.rows += 1;
+        self.resid = [f64::NAN; 7];
         let t = s.t;
         let dt = self.last_t.map_or(0.0, |lt| t - lt);
         if self.last_t.is_some() && dt > self.cfg.data_gap {
@@ -490,7 +504,9 @@ impl Detector {
         if s.reports_no_fix() && t - lf > 0.5 * self.gps_dt {
             return true;
         }
-        let timeout = self.cfg.outage_timeout.unwrap_or(1.5 * self.gps_dt + 0.02);
+        // 1.5 periods, or more for a jittery receiver: a late fix is not an outage.
+        let auto = (1.5 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
+        let timeout = self.cfg.outage_timeout.unwrap_or(auto);
         self.flying() && t - lf > timeout
     }
 
@@ -519,6 +535,7 @@ impl Detector {
             return;
         }
         let inn = kf.baro_innovation(baro);
+        self.resid[6] = inn.nu[0];
         let h_prior = -kf.x[2] + kf.x[9];
         let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
         let prev = self.ind.previous(6);
@@ -548,6 +565,7 @@ impl Detector {
             let d = t - lf;
             if d > 0.0 && d < 5.0 {
                 // Learn the GPS period for the outage timeout.
+                self.gps_jitter += 0.05 * ((d - self.gps_dt).abs() - self.gps_jitter);
                 self.gps_dt += 0.05 * (d - self.gps_dt);
             }
         }
@@ -571,6 +589,7 @@ impl Detector {
 
         // Residuals and predicted changes since the last epoch.
         let pin = kf.position_innovation(&y);
+        self.resid[..3].copy_from_slice(&pin.nu);
         let pos_prior = kf.position();
         let mut prev_r = [0.0; 6];
         for a in 0..3 {
@@ -580,6 +599,7 @@ impl Detector {
         let vel_prior = kf.velocity();
         if let Some(v) = &vel {
             let vin = kf.velocity_innovation(v);
+            self.resid[3..6].copy_from_slice(&vin.nu);
             for a in 0..3 {
                 prev_r[3 + a] = self.ind.previous(3 + a);
                 self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.P[(3 + a, 3 + a)]);

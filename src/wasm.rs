@@ -117,7 +117,8 @@ export interface AuditReport {
   faults: FaultInterval[]; dataGaps: { start: number; end: number }[]; missing: string[]; warnings: string[];
   meta: [string, string][]; metrics?: Metrics; stats: DetectorStats;
 }
-export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array } }
+/** Residual columns: GPS position N/E/D (m), velocity N/E/D (m/s), baro (m); NaN on rows without that measurement. */
+export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array; rPn: Float64Array; rPe: Float64Array; rPd: Float64Array; rVn: Float64Array; rVe: Float64Array; rVd: Float64Array; rBaro: Float64Array } }
 export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][]; topicCounts: [string, number][] }
 "#;
 
@@ -291,15 +292,9 @@ impl Detector {
     }
 }
 
-/// Audit a whole log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised
-/// by content). Returns `{ report, columns: { t, status, f, r, c, kind } }`.
-#[wasm_bindgen(js_name = auditBytes, unchecked_return_type = "AuditResult")]
-pub fn audit_bytes(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
-    let cfg = config_from(&config)?;
-    let log = logs::read_any(bytes).map_err(err)?;
-    let (report, cols) = audit::audit(&log, &cfg).map_err(err)?;
+fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue, JsError> {
     let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
-    let rep = serde::Serialize::serialize(&report, &ser).map_err(err)?;
+    let rep = serde::Serialize::serialize(report, &ser).map_err(err)?;
     let c = Object::new();
     set(&c, "t", &Float64Array::from(&cols.t[..]).into());
     set(&c, "status", &Uint8Array::from(&cols.status[..]).into());
@@ -307,10 +302,68 @@ pub fn audit_bytes(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "Detector
     set(&c, "r", &Float64Array::from(&cols.r[..]).into());
     set(&c, "c", &Float64Array::from(&cols.c[..]).into());
     set(&c, "kind", &Uint8Array::from(&cols.kind[..]).into());
+    for (name, v) in audit::RESID_NAMES.iter().zip(cols.resid.iter()) {
+        set(&c, name, &Float64Array::from(&v[..]).into());
+    }
     let out = Object::new();
     set(&out, "report", &rep);
     set(&out, "columns", &c.into());
     Ok(out.into())
+}
+
+/// Audit a whole log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised
+/// by content). Returns `{ report, columns: { t, status, f, r, c, kind, rPn..rBaro } }`.
+#[wasm_bindgen(js_name = auditBytes, unchecked_return_type = "AuditResult")]
+pub fn audit_bytes(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
+    let cfg = config_from(&config)?;
+    let log = logs::read_any(bytes).map_err(err)?;
+    let (report, cols) = audit::audit(&log, &cfg).map_err(err)?;
+    audit_result(&report, &cols)
+}
+
+/// An audit run in slices, for progress bars: `new Auditor(bytes, config)`
+/// parses the log; call `step(rows)` until it returns 1 (the fraction done),
+/// then `finish()` for the same result as `auditBytes`.
+#[wasm_bindgen]
+pub struct Auditor {
+    run: Option<audit::AuditRun<logs::LogData>>,
+    rows: usize,
+}
+
+#[wasm_bindgen]
+impl Auditor {
+    #[wasm_bindgen(constructor)]
+    pub fn new(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Auditor, JsError> {
+        let cfg = config_from(&config)?;
+        let log = logs::read_any(bytes).map_err(err)?;
+        let rows = log.samples.len();
+        let run = audit::AuditRun::new(log, &cfg).map_err(err)?;
+        Ok(Auditor { run: Some(run), rows })
+    }
+
+    /// Rows in the log.
+    pub fn rows(&self) -> f64 {
+        self.rows as f64
+    }
+
+    /// Process up to `rows` more rows; returns the fraction done.
+    pub fn step(&mut self, rows: f64) -> f64 {
+        match self.run.as_mut() {
+            Some(r) => {
+                r.step(if rows.is_finite() && rows > 0.0 { rows as usize } else { 1 });
+                r.progress()
+            }
+            None => 1.0,
+        }
+    }
+
+    /// Finish (processing what is left) and return `{ report, columns }`.
+    #[wasm_bindgen(unchecked_return_type = "AuditResult")]
+    pub fn finish(&mut self) -> Result<JsValue, JsError> {
+        let run = self.run.take().ok_or_else(|| err("Auditor.finish: already finished"))?;
+        let (report, cols) = run.finish();
+        audit_result(&report, &cols)
+    }
 }
 
 /// Parse a log into columns (for plotting): `{ format, columns: {name: Float64Array}, warnings, missing, meta }`.

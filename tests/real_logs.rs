@@ -66,3 +66,36 @@ fn ardupilot_logging_pause_is_a_data_gap_not_a_fault() {
     );
     assert!(rep.warnings.iter().any(|w| w.contains("data gap")));
 }
+
+/// Share of GPS epochs flagged by a residual verdict outside `[a, b)` (s).
+fn flagged_outside(p: &str, a: f64, b: f64) -> (f64, Vec<navguard::audit::FaultInterval>) {
+    let log = read_any(&data(p)).unwrap();
+    let mut det = navguard::Detector::new(Config::default()).unwrap();
+    let (mut n, mut k) = (0u32, 0u32);
+    for s in &log.samples {
+        let o = det.push(s).unwrap();
+        if o.gps_epoch && !(s.t >= a && s.t < b) {
+            n += 1;
+            k += o.status as u32;
+        }
+    }
+    let (rep, _) = audit(&log, &Config::default()).unwrap();
+    (k as f64 / n.max(1) as f64, rep.faults)
+}
+
+#[test]
+fn real_ardupilot_outage_is_found_within_2s_and_little_else() {
+    // Fix lost at about 97.0 s boot time, back at 103.4 s (data README).
+    let (outside, faults) = flagged_outside("ardupilot/Loiter_RTL.bin", 97.0, 104.5);
+    let first = faults.iter().filter(|f| f.end >= 97.0 && f.start <= 103.4).map(|f| f.start.max(97.0)).fold(f64::INFINITY, f64::min);
+    assert!(first <= 99.0, "outage first flagged at {first} s: {faults:?}");
+    assert!(outside <= 0.02, "{:.2}% of GPS epochs flagged outside the outage", 100.0 * outside);
+}
+
+#[test]
+fn clean_real_logs_stay_clean() {
+    for p in ["csv/ansfl_phantom4_rtk_clean.csv", "px4/sample_px4_events.ulg"] {
+        let (frac, _) = flagged_outside(p, f64::INFINITY, f64::INFINITY);
+        assert!(frac <= 0.01, "{p}: {:.2}% of GPS epochs flagged", 100.0 * frac);
+    }
+}

@@ -57,7 +57,18 @@ function audit(file, opt) {
   const config = readConfig(opt.config);
   progress(`auditing ${file} (${(bytes.length / 1e6).toFixed(1)} MB)...`);
   let res;
-  try { res = ng.auditBytes(bytes, config); } catch (e) { progressDone(); fail(`${file}: ${e.message}`); }
+  try {
+    // In slices, so a long audit shows its progress on a terminal.
+    const run = new ng.Auditor(bytes, config);
+    const rows = run.rows();
+    const slice = Math.max(20000, Math.ceil(rows / 100));
+    for (let done = 0; done < 1; ) {
+      done = run.step(slice);
+      progress(`auditing ${file}: ${(100 * done).toFixed(0)}% of ${rows} rows`);
+    }
+    res = run.finish();
+    run.free();
+  } catch (e) { progressDone(); fail(`${file}: ${e.message}`); }
   progressDone();
   const { report, columns } = res;
   if (opt['per-sample']) writeFileSync(opt['per-sample'], perSampleCsv(columns));

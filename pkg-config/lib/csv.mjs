@@ -1,12 +1,18 @@
 // Small CSV writers for the CLI (the reader is in the wasm core).
 
-/** Per-sample output CSV: header t,status,f,r,c,kind. */
+const RESID = ['rPn', 'rPe', 'rPd', 'rVn', 'rVe', 'rVd', 'rBaro'];
+
+/** Per-sample output CSV: t,status,f,r,c (contract), then kind and the
+ * residuals per axis (m, m/s; empty where the row had no such measurement). */
 export function perSampleCsv(cols) {
   const n = cols.t.length;
-  const parts = ['t,status,f,r,c,kind\n'];
+  const res = RESID.filter((k) => cols[k]);
+  const parts = [['t,status,f,r,c,kind', ...res].join(',') + '\n'];
   let chunk = '';
   for (let i = 0; i < n; i++) {
-    chunk += `${cols.t[i]},${cols.status[i]},${fmt(cols.f[i])},${fmt(cols.r[i])},${fmt(cols.c[i])},${cols.kind[i]}\n`;
+    let line = `${cols.t[i]},${cols.status[i]},${fmt(cols.f[i])},${fmt(cols.r[i])},${fmt(cols.c[i])},${cols.kind[i]}`;
+    for (const k of res) line += ',' + fmt(cols[k][i]);
+    chunk += line + '\n';
     if (chunk.length > 1 << 16) { parts.push(chunk); chunk = ''; }
   }
   parts.push(chunk);
