@@ -19,6 +19,10 @@ const COLORS = {
   eph: '#c2410c',
   fix: '#15803d',
   track: '#94a3b8',
+  rn: '#2563eb',
+  re: '#16a34a',
+  rd: '#9333ea',
+  baro: '#ea580c',
 };
 const KIND_FILL = { 1: 'rgba(220,38,38,0.13)', 2: 'rgba(217,119,6,0.16)', 3: 'rgba(156,163,175,0.18)' };
 const KIND_SOLID = { 0: '#dbeafe', 1: COLORS.fault, 2: COLORS.outage, 3: '#d1d5db' };
@@ -41,6 +45,7 @@ const state = {
   track: null,
   selected: -1,
   syncing: false,
+  progressLog: [],    // progress messages of the current job (for the test)
 };
 window.navguard = state; // handle for debugging and the browser test
 
@@ -77,6 +82,7 @@ function runJob(kind, msg) {
   state.jobKind = kind;
   state.job = send(msg);
   document.body.dataset.state = 'busy';
+  state.progressLog = [];
   showProgress(kind === 'rerun' ? 'detecting' : 'reading', 0, kind === 'rerun' ? 'rerunning with the new configuration' : '');
 }
 
@@ -129,6 +135,7 @@ function onWorkerMessage(m) {
 // ---------------------------------------------------------------- progress
 
 function showProgress(stage, frac, detail) {
+  if (state.progressLog.length < 1000) state.progressLog.push({ stage, frac, detail });
   const p = $('#progress');
   p.hidden = false;
   const si = STAGES.indexOf(stage);
@@ -545,9 +552,55 @@ function renderPlots(m, keepX) {
   }, gData, $('#plot-gps'));
   $('#plot-gps').classList.toggle('nodata', !hasGq);
 
-  state.plots = [band, fPlot, rcPlot, gPlot];
+  // (e) residuals per axis: GPS position N/E/D + baro, GPS velocity N/E/D
+  const rPos = residualPlot($('#plot-rpos'), p.resPos, 'residual (m)', 'm', [
+    ['N', COLORS.rn], ['E', COLORS.re], ['D', COLORS.rd], ['baro', COLORS.baro],
+  ], false);
+  const rVel = residualPlot($('#plot-rvel'), p.resVel, 'residual (m/s)', 'm/s', [
+    ['N', COLORS.rn], ['E', COLORS.re], ['D', COLORS.rd],
+  ], true);
+
+  state.plots = [band, fPlot, rcPlot, gPlot, rPos, rVel];
   renderTrack(p);
   if (keepX) setX(keepX[0], keepX[1]);
+}
+
+// Residual series sampled only on measurement rows (see sparseSeries in the
+// worker): `undefined` between samples is drawn across, `null` breaks the line.
+function residualPlot(host, res, axisLabel, unit, series, last) {
+  const data = pad(res, res.ys);
+  const u = new uPlot({
+    ...baseTimeOpts(axisLabel, 180, {
+      scales: {
+        y: {
+          range: (u, lo, hi) => {
+            if (lo == null || hi == null) return [-1, 1];
+            // at least ±0.25 of the unit, so a quiet flight does not show noise as structure
+            const a = Math.min(lo, -0.25), b = Math.max(hi, 0.25);
+            const m = (b - a) * 0.06;
+            return [a - m, b + m];
+          },
+        },
+      },
+      hooks: { drawAxes: [shadeHook(false)] },
+    }),
+    series: [
+      { label: 't (s)', value: (u, v) => fmt(v, 2) },
+      ...series.map(([name, color], i) => ({
+        label: `${name} (${unit})`,
+        scale: 'y',
+        stroke: color,
+        width: name === 'baro' ? 1 : 1.25,
+        spanGaps: false,
+        points: { size: 4, width: 1, fill: color },
+        value: (u, v) => fmt(v, 2),
+        show: res.n[i] > 0,
+      })),
+    ],
+    axes: [tAxis(last), yAxis(axisLabel, 'y'), spacerAxis()],
+  }, data, host);
+  host.classList.toggle('nodata', !res.n.some((c) => c > 0));
+  return u;
 }
 
 // (a) GPS track, N up / E right, equal metres per pixel, coloured by status.

@@ -5,18 +5,23 @@
 //   {type:'rerun', config}                 audit the cached log again
 //   {type:'csv'}                           per-sample CSV of the last audit
 // Messages out: ready | progress | result | csv | error (each with the job id).
-import init, { auditBytes, readLog, simulate, scenarioNames, Detector, version } from './pkg/navguard.js';
+import init, { Auditor, readLog, simulate, scenarioNames, Detector, version } from './pkg/navguard.js';
 
 const ready = init();
 let bytes = null;     // Uint8Array of the current log
 let log = null;       // readLog() result for it
 let source = null;    // {kind:'file'|'sim', name, size}
-let last = null;      // last auditBytes() result
+let last = null;      // last audit result ({report, columns})
 
 const post = (msg, transfer) => self.postMessage(msg, transfer || []);
 const progress = (id, stage, frac, detail) => post({ type: 'progress', id, stage, frac, detail });
 // Let the progress message leave before a long synchronous wasm call.
 const yieldNow = () => new Promise((r) => setTimeout(r, 0));
+// Same, without the 4 ms clamp nested timers get (used between audit slices).
+const tick = new MessageChannel();
+const tickWaiters = [];
+tick.port1.onmessage = () => tickWaiters.shift()();
+const yieldFast = () => new Promise((r) => { tickWaiters.push(r); tick.port2.postMessage(0); });
 
 self.onmessage = async (ev) => {
   const msg = ev.data;
@@ -52,10 +57,8 @@ self.onmessage = async (ev) => {
     } else {
       throw new Error(`unknown message ${msg.type}`);
     }
-    progress(id, 'detecting', 0, `running the detector over ${log.rows.toLocaleString('en-US')} samples`);
-    await yieldNow();
     const t0 = performance.now();
-    last = auditBytes(bytes, msg.config || undefined);
+    last = await audit(id, msg.config || undefined);
     const auditMs = performance.now() - t0;
     progress(id, 'detecting', 1, 'preparing plot data');
     await yieldNow();
@@ -95,6 +98,28 @@ async function parse(id) {
   last = null;
   log = readLog(bytes);
   progress(id, 'parsing', 1, `${log.format}: ${log.rows.toLocaleString('en-US')} samples`);
+}
+
+// Run the detector in slices so the page sees a real percentage. The time
+// spent yielding between slices is small next to a slice (>= 20 000 rows).
+async function audit(id, config) {
+  const samples = `${log.rows.toLocaleString('en-US')} samples`;
+  progress(id, 'detecting', 0, `running the detector over ${samples}: 0 %`);
+  await yieldNow();
+  const a = new Auditor(bytes, config);
+  try {
+    const n = a.rows();
+    const slice = Math.max(20000, Math.ceil(n / 100));
+    // step() returns 1 once every row is in; the bound only guards a stall
+    for (let frac = n ? 0 : 1, left = Math.ceil(n / slice) + 1; frac < 1 && left > 0; left--) {
+      frac = a.step(slice);
+      progress(id, 'detecting', frac, `running the detector over ${samples}: ${Math.floor(100 * frac)} %`);
+      await yieldFast();
+    }
+    return a.finish();
+  } finally {
+    a.free();
+  }
 }
 
 function fmtBytes(n) {
@@ -194,9 +219,85 @@ function preparePlots(log, audit) {
     tr.status.push(ac.status[i]);
   }
 
+  const resPos = sparseSeries(t, [ac.rPn, ac.rPe, ac.rPd, ac.rBaro], inGapAfter);
+  const resVel = sparseSeries(t, [ac.rVn, ac.rVe, ac.rVd], inGapAfter);
+
   // Labels, for the summary (ground truth present?).
   const hasLabel = !!cols.label;
-  return { tMin, tMax, ind, runs, gq, tr, anchor: Number.isNaN(lat0) ? null : [lat0, lon0], hasLabel, gaps };
+  return { tMin, tMax, ind, runs, gq, tr, resPos, resVel, anchor: Number.isNaN(lat0) ? null : [lat0, lon0], hasLabel, gaps };
+}
+
+/** Aligned data for measurement-rate series (residuals exist only on GPS or
+ *  baro rows): x = the rows where any series is finite; per series the value,
+ *  `undefined` where it has no sample (uPlot draws across it and the cursor
+ *  skips it) and `null` to break the line over a data gap or a pause of more
+ *  than max(1 s, 5 × its median sample interval), e.g. a GPS outage.
+ *  Returns {t, ys: [[...], ...], n: [samples per series]}. */
+function sparseSeries(t, cols, inGapAfter) {
+  const k = cols.length;
+  const have = cols.map((c) => !!c && c.length === t.length);
+  // pass 1: per-series median interval
+  const maxDt = cols.map((c, s) => {
+    if (!have[s]) return Infinity;
+    const dts = [];
+    let prev = NaN;
+    for (let i = 0; i < t.length; i++) {
+      if (!Number.isFinite(c[i])) continue;
+      if (!Number.isNaN(prev)) dts.push(t[i] - prev);
+      prev = t[i];
+    }
+    if (!dts.length) return Infinity;
+    const d = Float64Array.from(dts).sort();
+    return Math.max(1, 5 * d[d.length >> 1]);
+  });
+  // pass 2: merge
+  const x = [];
+  const ys = cols.map(() => []);
+  const lastT = new Array(k).fill(NaN);
+  const lastIdx = new Array(k).fill(-1);
+  const counts = new Array(k).fill(0);
+  for (let i = 0; i < t.length; i++) {
+    let any = false;
+    for (let s = 0; s < k; s++) if (have[s] && Number.isFinite(cols[s][i])) { any = true; break; }
+    if (!any) continue;
+    const ti = t[i];
+    // breaks first: null on every x between the series' last sample and this
+    // one (uPlot clips a run of nulls from the sample before to the sample
+    // after); a new x halfway when there is none in between
+    for (let s = 0; s < k; s++) {
+      if (!have[s] || !Number.isFinite(cols[s][i]) || lastIdx[s] < 0) continue;
+      if (ti - lastT[s] <= maxDt[s] && !inGapAfter(lastT[s], ti)) continue;
+      const j0 = lastIdx[s] + 1;
+      // the last x may already be this instant (another series' sample)
+      let end = x.length && x[x.length - 1] === ti ? x.length - 1 : x.length;
+      if (j0 >= end) {
+        x.splice(end, 0, (x[end - 1] + ti) / 2);
+        for (let q = 0; q < k; q++) {
+          // extend other series' null runs that reach up to here
+          ys[q].splice(end, 0, ys[q][end - 1] === null ? null : undefined);
+          if (lastIdx[q] >= end) lastIdx[q]++;
+        }
+        end++;
+      }
+      for (let j = j0; j < end; j++) ys[s][j] = null;
+    }
+    // rows sharing an instant (e.g. a GPS and a baro row) share one x
+    const row = x.length && x[x.length - 1] === ti ? x.length - 1 : -1;
+    const at = row >= 0 ? row : x.length;
+    if (row < 0) {
+      x.push(ti);
+      for (const y of ys) y.push(undefined);
+    }
+    for (let s = 0; s < k; s++) {
+      if (!have[s] || !Number.isFinite(cols[s][i])) continue;
+      if (ys[s][at] != null) continue; // keep the first of two samples at one instant
+      ys[s][at] = cols[s][i];
+      lastT[s] = ti;
+      lastIdx[s] = at;
+      counts[s]++;
+    }
+  }
+  return { t: x, ys, n: counts };
 }
 
 function pushRow(o, t, v) {
@@ -212,15 +313,21 @@ function makeGapTest(gaps) {
   };
 }
 
+const RESID_COLS = ['rPn', 'rPe', 'rPd', 'rVn', 'rVe', 'rVd', 'rBaro'];
+
 function perSampleCsv(c) {
-  const parts = ['t,status,f,r,c,kind\n'];
+  const parts = [`t,status,f,r,c,kind,${RESID_COLS.join(',')}\n`];
   const n = c.t.length;
+  const res = RESID_COLS.map((k) => c[k] || new Float64Array(n).fill(NaN));
+  const cell = (x) => (Number.isFinite(x) ? x : '');
   const CH = 20000;
   for (let i0 = 0; i0 < n; i0 += CH) {
     let s = '';
     const i1 = Math.min(n, i0 + CH);
     for (let i = i0; i < i1; i++) {
-      s += `${c.t[i]},${c.status[i]},${c.f[i]},${c.r[i]},${c.c[i]},${c.kind[i]}\n`;
+      s += `${c.t[i]},${c.status[i]},${c.f[i]},${c.r[i]},${c.c[i]},${c.kind[i]}`;
+      for (const r of res) s += `,${cell(r[i])}`;
+      s += '\n';
     }
     parts.push(s);
   }

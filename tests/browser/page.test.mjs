@@ -87,10 +87,35 @@ const faultRows = (page) => page.$$eval('#faults tbody tr[data-index]', (trs) =>
 
 async function assertPlots(page) {
   const sizes = await page.$$eval('.uplot canvas', (cs) => cs.map((c) => [c.width, c.height]));
-  assert.ok(sizes.length >= 5, `expected at least 5 uPlot canvases, found ${sizes.length}`);
+  assert.ok(sizes.length >= 7, `expected at least 7 uPlot canvases, found ${sizes.length}`);
   for (const [w, h] of sizes) assert.ok(w > 0 && h > 0, `canvas has zero size: ${w}x${h}`);
   const ids = await page.$$eval('.plot-host', (hs) => hs.filter((h) => h.querySelector('.uplot canvas')).map((h) => h.id));
-  for (const id of ['plot-track', 'plot-band', 'plot-f', 'plot-rc', 'plot-gps']) assert.ok(ids.includes(id), `plot ${id} not rendered`);
+  for (const id of ['plot-track', 'plot-band', 'plot-f', 'plot-rc', 'plot-gps', 'plot-rpos', 'plot-rvel']) assert.ok(ids.includes(id), `plot ${id} not rendered`);
+  // every time plot, the residual ones included, shares the cursor/zoom sync
+  const n = await page.evaluate(() => window.navguard.plots.length);
+  assert.equal(n, 6, 'expected 6 synchronised time plots');
+}
+
+// Finite samples per series of the residual plots, by legend label.
+const residualCounts = (page) => page.evaluate(() => {
+  const out = {};
+  for (const [host, u] of [['pos', window.navguard.plots[4]], ['vel', window.navguard.plots[5]]]) {
+    u.series.forEach((s, i) => { if (i) out[`${host} ${s.label}`] = u.data[i].filter((v) => Number.isFinite(v)).length; });
+  }
+  return out;
+});
+
+// The detector stage reported a real percentage (recorded by the page as the
+// worker's progress messages arrive, so this does not depend on timing).
+async function detectingProgress(page) {
+  const log = await page.evaluate(() => window.navguard.progressLog);
+  const det = log.filter((p) => p.stage === 'detecting' && / \d+ %$/.test(p.detail || ''));
+  assert.ok(det.length >= 2, `no detecting progress with a percentage: ${JSON.stringify(log)}`);
+  assert.equal(det[0].frac, 0);
+  assert.equal(det[det.length - 1].frac, 1);
+  assert.match(det[det.length - 1].detail, / 100 %$/);
+  for (let i = 1; i < det.length; i++) assert.ok(det[i].frac > det[i - 1].frac, `progress went backwards: ${JSON.stringify(det)}`);
+  return det;
 }
 
 test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots drawn, no errors', async () => {
@@ -108,6 +133,13 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
     assert.ok(hit.length > 0, `no fault interval overlaps the GPS outage 97–104 s; intervals: ${JSON.stringify(rows)}`);
 
     await assertPlots(page);
+    const counts = await residualCounts(page);
+    for (const k of ['pos N (m)', 'pos E (m)', 'pos D (m)', 'vel N (m/s)', 'vel E (m/s)', 'vel D (m/s)']) {
+      assert.ok(counts[k] > 500, `residual series ${k} has ${counts[k]} samples`);
+    }
+    assert.ok(counts['pos baro (m)'] > 1000, `baro residual has ${counts['pos baro (m)']} samples`);
+    const det = await detectingProgress(page);
+    assert.match(det[0].detail, /15,124 samples/);
 
     // clicking the row zooms every time plot to it (± margin)
     const idx = await page.$$eval('#faults tbody tr[data-index]', (trs) => trs.findIndex((tr) => Number(tr.dataset.start) <= 104 && Number(tr.dataset.end) >= 97));
@@ -124,13 +156,32 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
     await page.mouse.dblclick(box.x, box.y);
     const reset = await page.evaluate(() => window.navguard.plots.map((u) => u.scales.x.max - u.scales.x.min));
     for (const span of reset) assert.ok(span > 200, `double-click did not reset the zoom (span ${span} s)`);
+
+    // hovering a residual plot shows the nearest samples in its legend and
+    // moves the synchronised cursor on the other time plots
+    const over = page.locator('#plot-rpos .u-over');
+    const obox = await over.boundingBox();
+    await over.hover({ position: { x: obox.width * 0.8, y: obox.height / 2 } });
+    const legendVals = await page.$$eval('#plot-rpos .u-legend .u-value', (vs) => vs.map((v) => v.textContent));
+    assert.ok(legendVals.slice(1).every((v) => /^-?\d+\.\d\d$/.test(v)), `residual legend values: ${JSON.stringify(legendVals)}`);
+    const cursors = await page.evaluate(() => window.navguard.plots.map((u) => u.cursor.left));
+    for (const left of cursors) assert.ok(left > 0, `cursor not synchronised: ${JSON.stringify(cursors)}`);
     await page.mouse.move(5, 5);
+    // the hover scrolled the page: back to the top for a clean full-page screenshot
+    await page.evaluate(() => window.scrollTo(0, 0));
 
     // per-sample CSV export
     const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#export-csv')]);
     const csv = await readFile(await dl.path(), 'utf8');
-    assert.equal(csv.split('\n')[0], 't,status,f,r,c,kind');
-    assert.ok(csv.split('\n').length > 1000);
+    const lines = csv.trimEnd().split('\n');
+    assert.equal(lines[0], 't,status,f,r,c,kind,rPn,rPe,rPd,rVn,rVe,rVd,rBaro');
+    assert.ok(lines.length > 1000);
+    const cells = lines.slice(1).map((l) => l.split(','));
+    for (const c of cells) assert.equal(c.length, 13, `bad CSV row: ${c.join(',')}`);
+    const gpsRows = cells.filter((c) => c[6] !== '');
+    assert.ok(gpsRows.length > 500 && gpsRows.length < cells.length / 2, `rows with a GPS residual: ${gpsRows.length} of ${cells.length}`);
+    for (const c of gpsRows) for (const v of c.slice(6, 12)) assert.ok(Number.isFinite(Number(v)) && v !== '', `bad residual cell in ${c.join(',')}`);
+    assert.ok(cells.some((c) => c[12] !== '' && Number.isFinite(Number(c[12]))), 'no baro residual in the CSV');
     const [dj] = await Promise.all([page.waitForEvent('download'), page.click('#export-json')]);
     const rep = JSON.parse(await readFile(await dj.path(), 'utf8'));
     assert.equal(rep.format, 'dataflash');
@@ -197,6 +248,36 @@ test('drag and drop a navlog CSV onto the page', async () => {
     assert.match(summary, /navlog CSV/);
     assert.equal(await page.$eval('#drop', (d) => d.hidden), true);
     await assertPlots(page);
+    // GPS-only log: GPS residuals, no baro residual
+    const counts = await residualCounts(page);
+    assert.ok(counts['pos N (m)'] > 250 && counts['vel D (m/s)'] > 250, JSON.stringify(counts));
+    assert.equal(counts['pos baro (m)'], 0);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+test('a long log reports the detecting stage in several slices', async () => {
+  const { page, errors } = await openPage();
+  try {
+    // 45 000 rows of 10 Hz GPS-only flight: slices of 20 000 rows -> 3 steps
+    await page.evaluate(() => {
+      const lines = ['t,lat,lon,alt,vn,ve,vd,fix,sats,eph'];
+      for (let i = 0; i < 45000; i++) {
+        const t = i * 0.1;
+        lines.push(`${t.toFixed(1)},${(31.94 + (5 * t) / 111320).toFixed(9)},118.79,50,5,0,0,3,11,0.9`);
+      }
+      const dt = new DataTransfer();
+      dt.items.add(new File([lines.join('\n') + '\n'], 'long.csv', { type: 'text/csv' }));
+      window.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+    });
+    await waitDone(page);
+    const det = await detectingProgress(page);
+    const fracs = det.map((p) => p.frac);
+    assert.equal(fracs.length, 4, `expected 0 + 3 slices: ${JSON.stringify(det)}`);
+    assert.ok(Math.abs(fracs[1] - 20000 / 45000) < 0.01 && Math.abs(fracs[2] - 40000 / 45000) < 0.01, JSON.stringify(fracs));
+    assert.match(det[1].detail, /45,000 samples: 44 %$/);
     assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
   } finally {
     await page.close();
