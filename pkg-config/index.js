@@ -7,11 +7,14 @@ const core = require('./navguard.js');
 
 const COLS = core.columnNames();
 const N = COLS.length;
+const INDEX = Object.create(null);
+COLS.forEach((c, i) => { INDEX[c] = i; });
 
 class Detector extends core.Detector {
   constructor(config) {
     super(config);
     this._row = new Float64Array(N);
+    this._out = new Float64Array(7);
   }
 
   push(sample) {
@@ -19,13 +22,18 @@ class Detector extends core.Detector {
       throw new Error(`row ${this.rowCount()}: sample must be a plain object`);
     }
     const row = this._row;
-    for (let i = 0; i < N; i++) {
-      const v = sample[COLS[i]];
-      if (v === undefined || v === null) row[i] = NaN;
-      else if (typeof v === 'number') row[i] = v;
-      else throw new Error(`row ${this.rowCount()}: field '${COLS[i]}': must be a number`);
+    row.fill(NaN);
+    // Walk the sample's own keys: rows are sparse (an IMU row has ~10 of 26).
+    for (const k in sample) {
+      const i = INDEX[k];
+      if (i === undefined) continue;
+      const v = sample[k];
+      if (typeof v === 'number') row[i] = v;
+      else if (v !== undefined && v !== null) throw new Error(`row ${this.rowCount()}: field '${k}': must be a number`);
     }
-    return this.pushRow(row);
+    const o = this._out;
+    this.pushRowInto(row, o);
+    return { t: o[0], status: o[1], f: o[2], r: o[3], c: o[4], kind: o[5], gpsEpoch: o[6] === 1 };
   }
 }
 

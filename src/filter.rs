@@ -324,9 +324,7 @@ impl Kf {
     pub fn update_position(&mut self, y: &Vector3<f64>) -> Result<(), FilterError> {
         let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v];
         for i in 0..3 {
-            let mut h = SVector::<f64, N>::zeros();
-            h[IP + i] = 1.0;
-            self.scalar_update(&h, y[i], r[i] * r[i])?;
+            self.scalar_update(&[(IP + i, 1.0)], y[i], r[i] * r[i])?;
         }
         self.check_health()
     }
@@ -335,9 +333,7 @@ impl Kf {
     pub fn update_velocity(&mut self, y: &Vector3<f64>) -> Result<(), FilterError> {
         let r = self.noise.gps_vel;
         for i in 0..3 {
-            let mut h = SVector::<f64, N>::zeros();
-            h[IV + i] = 1.0;
-            self.scalar_update(&h, y[i], r * r)?;
+            self.scalar_update(&[(IV + i, 1.0)], y[i], r * r)?;
         }
         self.check_health()
     }
@@ -355,10 +351,7 @@ impl Kf {
             self.baro_initialised = true;
             return Ok(());
         }
-        let mut h = SVector::<f64, N>::zeros();
-        h[IP + 2] = -1.0;
-        h[IBARO] = 1.0;
-        self.scalar_update(&h, baro, self.noise.baro * self.noise.baro)?;
+        self.scalar_update(&[(IP + 2, -1.0), (IBARO, 1.0)], baro, self.noise.baro * self.noise.baro)?;
         self.check_health()
     }
 
@@ -409,26 +402,39 @@ impl Kf {
         }
     }
 
-    /// One scalar update `y = hᵀx + e`, `e ~ N(0, r)`, Joseph form.
-    fn scalar_update(&mut self, h: &SVector<f64, N>, y: f64, r: f64) -> Result<(), FilterError> {
+    /// One scalar update `y = hᵀx + e`, `e ~ N(0, r)`, Joseph form, with the
+    /// sparse `h` given as (state index, coefficient) pairs.
+    fn scalar_update(&mut self, h: &[(usize, f64)], y: f64, r: f64) -> Result<(), FilterError> {
         self.flush()?;
         if !y.is_finite() {
             return Err(FilterError::NonFinite("measurement"));
         }
-        let ph = self.P * h;
-        let s = h.dot(&ph) + r;
+        let mut ph = [0.0; N];
+        let mut hx = 0.0;
+        for &(j, c) in h {
+            for (i, v) in ph.iter_mut().enumerate() {
+                *v += c * self.P[(i, j)];
+            }
+            hx += c * self.x[j];
+        }
+        let s: f64 = h.iter().map(|&(j, c)| c * ph[j]).sum::<f64>() + r;
         if !(s.is_finite() && s > 0.0) {
             return Err(FilterError::CovarianceUnhealthy(0));
         }
-        let k = ph / s;
-        let nu = y - h.dot(&self.x);
-        self.x += k * nu;
+        let k: [f64; N] = core::array::from_fn(|i| ph[i] / s);
+        let nu = y - hx;
+        for i in 0..N {
+            self.x[i] += k[i] * nu;
+        }
         // Joseph form (I−khᵀ)P(I−khᵀ)ᵀ + r kkᵀ, expanded for a scalar
         // measurement: P − k phᵀ − ph kᵀ + s kkᵀ with ph = Ph, s = hᵀPh + r.
-        // Symmetric term by term and O(n²) instead of two n³ products.
+        // Symmetric term by term: the upper triangle is computed and mirrored,
+        // O(n²) instead of two n³ products.
         for i in 0..N {
-            for j in 0..N {
-                self.P[(i, j)] += s * k[i] * k[j] - k[i] * ph[j] - ph[i] * k[j];
+            for j in i..N {
+                let v = self.P[(i, j)] + s * k[i] * k[j] - k[i] * ph[j] - ph[i] * k[j];
+                self.P[(i, j)] = v;
+                self.P[(j, i)] = v;
             }
         }
         Ok(())

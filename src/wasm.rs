@@ -128,6 +128,8 @@ pub struct Detector {
     inner: CoreDetector,
     /// Reused column buffers for `pushColumns` (grown, never shrunk).
     cols: Vec<Vec<f64>>,
+    /// Reused row buffer for `pushColumns`.
+    rows: Vec<Sample>,
 }
 
 #[wasm_bindgen]
@@ -137,7 +139,7 @@ impl Detector {
     pub fn new(#[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Detector, JsError> {
         let cfg = config_from(&config)?;
         let inner = CoreDetector::new(cfg).map_err(err)?;
-        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()] })
+        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new() })
     }
 
     /// Push one sample (plain object keyed by CSV column names).
@@ -189,6 +191,23 @@ impl Detector {
         Ok(output_object(&out))
     }
 
+    /// Like `pushRow`, but writes `[t, status, f, r, c, kind, gpsEpoch]` into
+    /// `out` (length ≥ 7) instead of returning an object, so the JS wrapper
+    /// builds the result object itself: one boundary crossing per row.
+    #[wasm_bindgen(js_name = pushRowInto)]
+    pub fn push_row_into(&mut self, row: &[f64], out: &mut [f64]) -> Result<(), JsError> {
+        if row.len() != COLUMNS.len() || out.len() < 7 {
+            return Err(err(format!("pushRowInto: expected {} values and an output of 7, got {} and {}", COLUMNS.len(), row.len(), out.len())));
+        }
+        let mut s = Sample::default();
+        for (i, v) in row.iter().enumerate() {
+            s.set(i, *v);
+        }
+        let o = self.inner.push(&s).map_err(err)?;
+        out[..7].copy_from_slice(&[o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }]);
+        Ok(())
+    }
+
     /// Rows accepted so far (the next row's index in error messages).
     #[wasm_bindgen(js_name = rowCount)]
     pub fn row_count(&self) -> f64 {
@@ -237,20 +256,20 @@ impl Detector {
         }
         let n = n.unwrap_or(0);
         let base = self.inner.stats().rows;
-        let row_at = |cols: &Vec<Vec<f64>>, j: usize| -> Sample {
-            let mut s = Sample::default();
-            for (i, p) in present.iter().enumerate() {
-                if *p {
-                    s.set(i, cols[i][j]);
+        // Assemble and validate every row (time order included) before
+        // touching state, so a rejected batch changes nothing.
+        self.rows.clear();
+        self.rows.resize(n, Sample::default());
+        for (i, p) in present.iter().enumerate() {
+            if *p {
+                for (row, v) in self.rows.iter_mut().zip(&self.cols[i][..n]) {
+                    row.set(i, *v);
                 }
             }
-            s
-        };
-        // Validate all rows (time order included) before touching state.
+        }
         let mut last_t = f64::NEG_INFINITY;
-        for j in 0..n {
-            let s = row_at(&self.cols, j);
-            self.inner.validate(&s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
+        for (j, s) in self.rows.iter().enumerate() {
+            self.inner.validate(s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
             if s.t < last_t {
                 return Err(err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, s.t, last_t)));
             }
@@ -261,9 +280,8 @@ impl Detector {
         let mut f = vec![0.0; n];
         let mut r = vec![0.0; n];
         let mut c = vec![0.0; n];
-        for j in 0..n {
-            let s = row_at(&self.cols, j);
-            let o = self.inner.push_valid(&s);
+        for (j, s) in self.rows.iter().enumerate() {
+            let o = self.inner.push_valid(s);
             status[j] = o.status;
             kind[j] = o.kind;
             f[j] = o.f;
