@@ -12,10 +12,11 @@
 //!
 //! Hybrid learning: with premises fixed, `F` is linear in the consequents, so
 //! they are solved by ridge-regularised least squares (normal equations via
-//! Cholesky, falling back to SVD); then premises take gradient steps on the
+//! Cholesky, raising the ridge if rounding makes them indefinite); then
+//! premises take gradient steps on the
 //! squared error. `exp` comes from `libm` so native and wasm agree bit for bit.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 /// Memberships per input.
@@ -135,8 +136,8 @@ impl Anfis {
         }
         let p = RULES * CP;
         // Accumulate AᵀA and Aᵀy directly: no n×p matrix.
-        let mut ata = DMatrix::<f64>::zeros(p, p);
-        let mut aty = DVector::<f64>::zeros(p);
+        let mut ata = SMatrix::<f64, { RULES * CP }, { RULES * CP }>::zeros();
+        let mut aty = SVector::<f64, { RULES * CP }>::zeros();
         let mut row = [0.0; RULES * CP];
         for k in 0..n {
             let x = &xs[k];
@@ -162,13 +163,23 @@ impl Anfis {
             }
             ata[(a, a)] += ridge.max(1e-9);
         }
-        let sol = match ata.clone().cholesky() {
-            Some(ch) => ch.solve(&aty),
-            None => match ata.svd(true, true).solve(&aty, 1e-12) {
-                Ok(s) => s,
-                Err(_) => return false,
-            },
-        };
+        // Cholesky on the (regularised) normal equations; if rounding leaves
+        // them indefinite, raise the ridge tenfold and retry. Fixed-size, so
+        // no general SVD is linked into the wasm.
+        let mut extra = 0.0;
+        let mut sol = None;
+        for _ in 0..8 {
+            let mut m = ata;
+            for a in 0..p {
+                m[(a, a)] += extra;
+            }
+            if let Some(ch) = m.cholesky() {
+                sol = Some(ch.solve(&aty));
+                break;
+            }
+            extra = if extra == 0.0 { 1e-6 * (1.0 + ata.diagonal().max()) } else { extra * 10.0 };
+        }
+        let Some(sol) = sol else { return false };
         if !sol.iter().all(|v| v.is_finite()) {
             return false;
         }
