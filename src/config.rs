@@ -173,7 +173,17 @@ impl ConfigInput {
         if text.trim().is_empty() {
             return Ok(Config::default());
         }
-        let input: ConfigInput = serde_json::from_str(text).map_err(|e| format!("config: {e}"))?;
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| format!("config: not JSON: {e}"))?;
+        let serde_json::Value::Object(map) = v else {
+            return Err("config: must be a JSON object".into());
+        };
+        // Field by field first, so a type error names its field.
+        for (k, val) in &map {
+            Self::check_field_name(k)?;
+            let one = serde_json::Value::Object([(k.clone(), val.clone())].into_iter().collect());
+            serde_json::from_value::<ConfigInput>(one).map_err(|e| format!("config.{k}: {e}"))?;
+        }
+        let input: ConfigInput = serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| format!("config: {e}"))?;
         input.check()
     }
 }

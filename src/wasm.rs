@@ -35,7 +35,12 @@ fn config_from(v: &JsValue) -> Result<Config, JsError> {
         return Err(err("config: must be a plain object"));
     }
     for k in Object::keys(v.unchecked_ref::<Object>()).iter() {
-        ConfigInput::check_field_name(&k.as_string().unwrap_or_default()).map_err(err)?;
+        let name = k.as_string().unwrap_or_default();
+        ConfigInput::check_field_name(&name).map_err(err)?;
+        // Field by field, so a type error names its field.
+        let one = Object::new();
+        set(&one, &name, &Reflect::get(v, &k).unwrap_or(JsValue::UNDEFINED));
+        serde_wasm_bindgen::from_value::<ConfigInput>(one.into()).map_err(|e| err(format!("config.{name}: {e}")))?;
     }
     let input: ConfigInput = serde_wasm_bindgen::from_value(v.clone()).map_err(|e| err(format!("config: {e}")))?;
     input.check().map_err(err)
