@@ -21,7 +21,7 @@ fn run(rows: &[Sample], oracle: bool, trace: bool) -> (metrics::Metrics, String)
         if !s.label.is_nan() && trace && o.gps_epoch && ((s.t * 10.0).round() as i64 % 5 == 0 || s.label == 1.0 || o.status == 1) {
             let i = det.indicators();
             println!(
-                "{:7.2} lab {} st {} k {} f {:6.3} r {:7.2} c {:5.2} pv {:5.2} rg {:?} cg {:?} ig {:?}",
+                "{:7.2} lab {} st {} k {} f {:6.3} r {:7.2} c {:5.2} pv {:5.2} bc {:5.2} im {:5.2} rg {:?} cg {:?} ig {:?}",
                 s.t,
                 s.label,
                 o.status,
@@ -30,6 +30,8 @@ fn run(rows: &[Sample], oracle: bool, trace: bool) -> (metrics::Metrics, String)
                 o.r,
                 o.c,
                 i.pv,
+                i.baro_cons,
+                i.imu,
                 i.r_group.map(|v| (v * 100.0).round() / 100.0),
                 i.c_group.map(|v| (v * 100.0).round() / 100.0),
                 i.inc_group.map(|v| (v * 100.0).round() / 100.0)
@@ -153,7 +155,7 @@ fn main() {
                 let Ok(o) = det.push(s) else { continue };
                 if s.t >= a && s.t <= b && (o.gps_epoch || s.fix.is_finite()) {
                     let i = det.indicators();
-                    println!("{:8.2} fix {} sats {} st {} k {} f {:6.3} r {:6.2} c {:4.2} pv {:5.2} rg {:?} pos {:?}", s.t, s.fix, s.sats, o.status, o.kind, o.f, o.r, o.c, i.pv, i.r_group.map(|v| (v * 100.0).round() / 100.0), det.position().map(|p| (p[2]*10.0).round()/10.0));
+                    println!("{:8.2} fix {} sats {} st {} k {} f {:6.3} r {:6.2} c {:4.2} pv {:5.2} bc {:5.2} im {:5.2} rg {:?} pos {:?}", s.t, s.fix, s.sats, o.status, o.kind, o.f, o.r, o.c, i.pv, i.baro_cons, i.imu, i.r_group.map(|v| (v * 100.0).round() / 100.0), det.position().map(|p| (p[2]*10.0).round()/10.0));
                 }
             }
         }

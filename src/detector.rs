@@ -19,6 +19,10 @@
 //! departs, or only the position was withheld and its departure is below 4
 //! (a larger offset with clean velocity aiding is a persisting step).
 //! A receiver that reports losing its fix is an outage on the ground too.
+//! A withheld barometer comes back once its vertical consistency (see
+//! `indicators`) stays below 1.5 for 5 baro samples; its offset state is then
+//! re-anchored (`Kf::reset_baro`), since it absorbed part of the fault
+//! before detection and would otherwise raise false alarms after it.
 //!
 //! Online cycle (eqs. 15–20): each epoch's own verdict files its (R, C) into
 //! database D1 (normal) or D2 (fault), ring buffers of length q, but only a
@@ -259,6 +263,9 @@ const RECOVER_INC: f64 = 2.0;
 const RECOVER_R: f64 = 4.0;
 /// ...and the position–velocity statistic below this.
 const RECOVER_PV: f64 = 2.0;
+/// Baro consistency below which a withheld baro counts as following the
+/// filter again (see `baro_row`).
+const BARO_RECOVER: f64 = 1.5;
 /// Epochs of agreement needed before recovering.
 const RECOVER_EPOCHS: u32 = 5;
 /// Receiver incoherence (RMS of u/σ_u, see `IndicatorEngine::incoherence`)
@@ -304,6 +311,16 @@ pub struct Detector {
     /// Consecutive normal GPS verdicts.
     normal_run: u32,
     group_bad: [bool; GROUPS],
+    /// The filter's vertical velocity integrated (altitude up, m), for the
+    /// baro consistency test.
+    alt_int: f64,
+    /// The filter's IMU-predicted velocity changes summed (m/s), for the IMU
+    /// consistency test; `imu_gap`: a prediction since the last GPS epoch ran
+    /// without IMU.
+    dv_imu: Vector3<f64>,
+    imu_gap: bool,
+    /// Consecutive baro samples consistent with the filter while withheld.
+    baro_calm: u32,
     last: Output,
     last_ind: Indicators,
     stats: Stats,
@@ -352,6 +369,10 @@ impl Detector {
             receiver_lost: false,
             normal_run: 0,
             group_bad: [false; GROUPS],
+            alt_int: 0.0,
+            dv_imu: Vector3::zeros(),
+            imu_gap: true,
+            baro_calm: 0,
             last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
             last_ind: Indicators::default(),
             stats: Stats::default(),
@@ -447,8 +468,18 @@ impl Detector {
         if dt > 0.0 {
             let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
             if let Some(kf) = self.kf.as_mut() {
-                if let Err(e) = kf.predict(dt, imu.as_ref()) {
-                    self.filter_failed(e);
+                let v0 = kf.velocity();
+                match kf.predict(dt, imu.as_ref()) {
+                    Ok(()) => {
+                        let v1 = kf.velocity();
+                        self.alt_int -= 0.5 * (v0[2] + v1[2]) * dt;
+                        if imu.is_some() {
+                            self.dv_imu += v1 - v0;
+                        } else {
+                            self.imu_gap = true;
+                        }
+                    }
+                    Err(e) => self.filter_failed(e),
                 }
             }
         }
@@ -460,7 +491,7 @@ impl Detector {
         }
         if s.has_baro() {
             self.stats.baro_rows += 1;
-            self.baro_row(s.baro);
+            self.baro_row(t, s.baro);
         }
 
         let mut out = if s.has_fix() {
@@ -524,9 +555,10 @@ impl Detector {
         self.kf = None;
         self.ind.reset_references();
         self.prev_baro_h = None;
+        self.imu_gap = true;
     }
 
-    fn baro_row(&mut self, baro: f64) {
+    fn baro_row(&mut self, t: f64, baro: f64) {
         let Some(kf) = self.kf.as_mut() else { return };
         if !kf.baro_initialised() {
             if kf.update_baro(baro).is_ok() {
@@ -540,12 +572,36 @@ impl Detector {
         let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
         let prev = self.ind.previous(6);
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
+        let cons = self.ind.observe_baro(t, baro - self.alt_int, self.group_bad[2]);
+        if self.group_bad[2] {
+            // Withheld baro that follows the filter's climb again (its change
+            // since before the fault is consistent): the fault is over, but
+            // the offset state absorbed part of it before detection, so
+            // re-anchor the offset instead of judging the baro against it.
+            self.baro_calm = if cons < BARO_RECOVER { self.baro_calm + 1 } else { 0 };
+            if self.baro_calm >= RECOVER_EPOCHS {
+                self.baro_calm = 0;
+                self.group_bad[2] = false;
+                kf.reset_baro();
+                self.ind.reset_axis(6);
+                self.ind.clear_baro();
+                if kf.update_baro(baro).is_ok() {
+                    self.prev_baro_h = Some(-kf.x[2] + kf.x[9]);
+                }
+                return;
+            }
+        } else {
+            self.baro_calm = 0;
+        }
         if !self.group_bad[2] {
             match kf.update_baro(baro) {
                 Ok(()) => {
                     let p_post = kf.P[(2, 2)] + kf.P[(9, 9)] - 2.0 * kf.P[(2, 9)];
                     let post = kf.baro_innovation(baro).nu[0];
                     self.ind.accept(6, prev, p_post, post);
+                    if self.last.status == 0 {
+                        self.ind.accept_baro();
+                    }
                 }
                 Err(e) => {
                     self.filter_failed(e);
@@ -583,6 +639,7 @@ impl Detector {
             self.prev_pos = y;
             self.prev_vel = v0;
             self.ind.reset_references();
+            self.imu_gap = true;
             self.coast_start = None;
             return Output { t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
         };
@@ -619,6 +676,17 @@ impl Detector {
             _ => self.ind.clear_pv(),
         }
         self.last_gps = vel.map(|v| (t, y, v));
+        // IMU consistency: GPS horizontal velocity against the filter's
+        // IMU-predicted velocity changes, only while every prediction since
+        // the last epoch ran on the IMU.
+        if self.imu_gap {
+            self.ind.clear_imu();
+            self.imu_gap = false;
+        }
+        match &vel {
+            Some(v) => self.ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
+            None => self.ind.clear_imu(),
+        }
         let ind = self.ind.close_epoch();
         self.last_ind = ind;
         let x = inputs(ind.r, ind.c);
@@ -747,6 +815,7 @@ impl Detector {
                 self.d1.push(x);
             }
             self.ind.accept_pv();
+            self.ind.accept_imu();
         }
         let driver = ind.r_driver().map_or(255, |g| g as u8);
         Output {

@@ -47,6 +47,49 @@
 //! position and velocity disagree (a degraded fix) and the velocity is
 //! withheld with the position.
 //!
+//! **Baro–filter vertical consistency (folded into the baro group's R).**
+//! A stuck barometer in a climb is invisible to `Δr`: the filter's baro-offset
+//! state absorbs the growing error (0.1 m per 10 Hz sample at 1 m/s, below
+//! the per-sample noise), so the departure test never rises. Instead, per baro
+//! sample, `z_t = b_t − H_t`, where `b` is the baro altitude and `H` the
+//! filter's vertical velocity integrated (trapezoid over each prediction, up
+//! positive): both should change by the same amount, so `z` moves only by
+//! baro noise, baro drift and the velocity error integrated. The statistic is
+//! the change of `z` over the last `T = 6 s`, minus a slow baseline rate
+//! `k` (learnt from clean windows with time constant 20 s, so a steady baro
+//! drift is not a fault), over a learnt σ:
+//! `R_b = |z_t − z_{t−T} − k·T| / (σ_b · sqrt(max(1, Δt/T)))`,
+//! `σ_b` the winsorised (3σ) exponential RMS (α = 0.005) of that change on
+//! epochs the detector accepted, from windows of 0.9–1.5 `T` only, start 1 m,
+//! floor 0.8 m. `R_baro = max(R_baro, R_b)`, where `R_b` is the largest
+//! value since the last GPS epoch. While the baro is withheld (its group
+//! departed) the window's start is held, so the statistic measures the
+//! departure since before the fault and keeps growing with it (the
+//! `sqrt(Δt/T)` keeps a random walk's growth from counting); once the baro
+//! follows the filter again for 5 samples (`R_b < 1.5`), the detector
+//! re-anchors the filter's baro offset (`Kf::reset_baro`) rather than judging
+//! the baro against an offset that absorbed part of the fault.
+//! Why 6 s and 0.8 m: a stuck baro's `z` grows linearly (1 m/s in the
+//! simulated climb), so its change over `T` grows with `T` (6 m/0.8 m ≈ 7.5
+//! at full window), while a bounded disturbance does not: the real
+//! ArduPilot Loiter log's descent to land (t ≈ 243–245 s, ground effect) moves
+//! `z` by about 1.5–2 m for 2 s, which a 2 s window with a 0.6 m floor read as
+//! `R_b ≈ 2.8` and flagged five epochs (2.32% of the flight, limit 2%). With
+//! `T = 6 s` and a 0.8 m floor it stays below the model's boundary (no new
+//! flag on that log) and the stuck baro is still flagged about 2.4 s after it
+//! sticks. The shipped ANFIS is *not* retrained for this input: trained with
+//! baro-stuck epochs at `R` of 5–15 the fault region widened and ramp and
+//! GPS-only flights regressed; a stuck baro crosses the existing `R`
+//! boundary on its own as its `R_b` grows.
+//!
+//! **IMU–GPS velocity consistency (diagnostic only).** The same window test on
+//! `z = v_GPS − ΣΔv_IMU` (horizontal GPS velocity minus the filter's
+//! IMU-predicted velocity changes summed, restarted whenever a prediction runs
+//! without IMU), `T = 2 s`, is reported as `Indicators::imu` but not folded
+//! into R: on the real Loiter log it reaches 3–6 for seconds at a time
+//! (take-off, manoeuvres), the same range a 0.3–0.5 m/s² accelerometer bias
+//! gives in simulation, so accel-bias stays undetected.
+//!
 //! **C-indicator (motion correlation).** Per group, the Pearson correlation
 //! through the origin between the consecutive `Δr_t` and the filter's own
 //! predicted change of the same quantity `m_t = H (x̂⁻_t − x̂⁺_{t−1})` over the
@@ -176,6 +219,12 @@ pub struct Indicators {
     /// Position–velocity consistency `R_pv` (NaN when unavailable): folded
     /// into `r_group[0]`, reported for diagnosis.
     pub pv: f64,
+    /// Baro–filter vertical consistency (NaN when unavailable): folded into
+    /// `r_group[2]`, reported for diagnosis.
+    pub baro_cons: f64,
+    /// IMU–GPS velocity consistency (NaN when unavailable: no IMU),
+    /// diagnostic only: not folded into `r` (see the module docs).
+    pub imu: f64,
 }
 
 impl Indicators {
@@ -238,6 +287,11 @@ pub struct IndicatorEngine {
     pending_any: bool,
     last: Indicators,
     pv: PvTest,
+    baro: LagTest<1>,
+    imu: LagTest<2>,
+    /// Largest statistic of each test since the last `close_epoch`.
+    baro_pending: f64,
+    imu_pending: f64,
 }
 
 /// Position–velocity consistency over a long window (see the module docs).
@@ -388,6 +442,169 @@ impl PvTest {
     }
 }
 
+/// Sensor-versus-model consistency over a time window (see the module docs):
+/// the change of `z = sensor − model` over the last `T` seconds, per axis,
+/// normalised by a learnt σ. `D` axes, ring of `cap` entries.
+#[derive(Clone, Debug)]
+pub struct LagTest<const D: usize> {
+    ring: Vec<(f64, [f64; D])>,
+    head: usize,
+    len: usize,
+    /// Window length, s.
+    span: f64,
+    /// Learnt mean square of the window change per axis.
+    ms: [f64; D],
+    floor: f64,
+    alpha: f64,
+    /// While held, the window's oldest entry is not evicted by age (the
+    /// statistic measures the departure since before the hold).
+    hold: bool,
+    /// Slow baseline rate of `z` per axis (units/s), learnt on clean
+    /// windows with time constant `tau` s; removed from the window change.
+    rate: [f64; D],
+    tau: f64,
+    /// Time of the last baseline update.
+    t_rate: f64,
+    /// Change of `z` at the last `push`, baseline removed (NaN when the
+    /// window is too short).
+    last_s: [f64; D],
+    /// Elapsed time the last change spans, s.
+    last_dt: f64,
+    last_t: f64,
+}
+
+impl<const D: usize> LagTest<D> {
+    pub fn new(cap: usize, span: f64, sigma0: f64, floor: f64, alpha: f64, tau: f64) -> Self {
+        LagTest {
+            ring: vec![(0.0, [0.0; D]); cap.max(2)],
+            head: 0,
+            len: 0,
+            span,
+            ms: [sigma0 * sigma0; D],
+            floor,
+            alpha,
+            hold: false,
+            rate: [0.0; D],
+            tau,
+            t_rate: f64::NAN,
+            last_s: [f64::NAN; D],
+            last_dt: 0.0,
+            last_t: f64::NAN,
+        }
+    }
+
+    pub fn clear(&mut self) {
+        self.head = 0;
+        self.len = 0;
+        self.hold = false;
+        self.last_s = [f64::NAN; D];
+        self.last_dt = 0.0;
+    }
+
+    fn sigma(&self, a: usize) -> f64 {
+        self.ms[a].sqrt().max(self.floor)
+    }
+
+    fn oldest(&self) -> (f64, [f64; D]) {
+        let cap = self.ring.len();
+        self.ring[(self.head + cap - self.len) % cap]
+    }
+
+    /// Hold the window's start (the sensor is withheld) or release it. A
+    /// release restarts the window: its entries span the held interval.
+    pub fn set_hold(&mut self, hold: bool) {
+        if self.hold && !hold {
+            self.clear();
+        }
+        self.hold = hold;
+    }
+
+    /// Add the entry `z` at time `t` and return the statistic
+    /// `sqrt(mean_a (Δz_a/σ_a)²)` with `σ_a` scaled by `sqrt(Δt/T)` when a
+    /// hold makes the window longer than `T`; NaN until the window spans
+    /// `T/2`. Non-finite input restarts the window.
+    pub fn push(&mut self, t: f64, z: [f64; D]) -> f64 {
+        self.last_s = [f64::NAN; D];
+        if !(t.is_finite() && z.iter().all(|v| v.is_finite())) {
+            let hold = self.hold;
+            self.clear();
+            self.hold = hold;
+            return f64::NAN;
+        }
+        let cap = self.ring.len();
+        if self.len > 0 && t < self.oldest().0 {
+            self.clear();
+        }
+        if self.len == cap {
+            self.len -= 1;
+        }
+        self.ring[self.head] = (t, z);
+        self.head = (self.head + 1) % cap;
+        self.len += 1;
+        if !self.hold {
+            // Evict while the next-oldest entry still spans the window.
+            while self.len > 2 {
+                let next = self.ring[(self.head + cap - self.len + 1) % cap].0;
+                if t - next >= self.span {
+                    self.len -= 1;
+                } else {
+                    break;
+                }
+            }
+        }
+        let (t0, z0) = self.oldest();
+        let dt = t - t0;
+        self.last_dt = dt;
+        if dt < 0.5 * self.span {
+            return f64::NAN;
+        }
+        self.last_t = t;
+        let scale = (dt / self.span).max(1.0).sqrt();
+        let mut z2 = 0.0;
+        for a in 0..D {
+            let s = z[a] - z0[a] - self.rate[a] * dt;
+            self.last_s[a] = s;
+            z2 += (s / (self.sigma(a) * scale)).powi(2);
+        }
+        (z2 / D as f64).sqrt()
+    }
+
+    /// The last pushed change was on clean data: learn σ from it (winsorised
+    /// at 3σ), only from full-length, unheld windows.
+    pub fn accept(&mut self) {
+        if self.hold || self.last_dt < 0.9 * self.span || self.last_dt > 1.5 * self.span {
+            return;
+        }
+        let k = if self.t_rate.is_finite() && self.tau > 0.0 { ((self.last_t - self.t_rate) / self.tau).clamp(0.0, 1.0) } else { 0.0 };
+        self.t_rate = self.last_t;
+        for a in 0..D {
+            let s = self.last_s[a];
+            if s.is_finite() {
+                let sg = self.sigma(a);
+                self.ms[a] += self.alpha * ((s * s).min(9.0 * sg * sg) - self.ms[a]);
+                // Baseline: the remaining mean rate, winsorised like σ.
+                let lim = 3.0 * sg;
+                self.rate[a] += k * s.clamp(-lim, lim) / self.last_dt;
+            }
+        }
+    }
+}
+
+/// Baro consistency: window, s; ring capacity (baro samples); σ start/floor, m; α.
+pub const BARO_SPAN: f64 = 6.0;
+const BARO_CAP: usize = 512;
+const BARO_SIGMA0: f64 = 1.0;
+const BARO_FLOOR: f64 = 0.8;
+const BARO_ALPHA: f64 = 0.005;
+const BARO_TAU: f64 = 20.0;
+/// IMU consistency: window, s; ring capacity (GPS epochs); σ start/floor, m/s; α.
+pub const IMU_SPAN: f64 = 2.0;
+const IMU_CAP: usize = 64;
+const IMU_SIGMA0: f64 = 0.5;
+const IMU_FLOOR: f64 = 0.06;
+const IMU_ALPHA: f64 = 0.005;
+const IMU_TAU: f64 = 20.0;
+
 impl IndicatorEngine {
     pub fn new(set: IndicatorSettings) -> Self {
         let w = set.window.max(1);
@@ -410,8 +627,14 @@ impl IndicatorEngine {
                 c_group: [f64::NAN; GROUPS],
                 inc_group: [f64::NAN; GROUPS],
                 pv: f64::NAN,
+                baro_cons: f64::NAN,
+                imu: f64::NAN,
             },
             pv: PvTest::new(PV_WINDOW_FACTOR * w),
+            baro: LagTest::new(BARO_CAP, BARO_SPAN, BARO_SIGMA0, BARO_FLOOR, BARO_ALPHA, BARO_TAU),
+            imu: LagTest::new(IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU),
+            baro_pending: f64::NAN,
+            imu_pending: f64::NAN,
         }
     }
 
@@ -514,6 +737,55 @@ impl IndicatorEngine {
         self.pv.inc_len = 0;
     }
 
+    /// Feed one baro sample's `z = baro − H` (H: the filter's vertical
+    /// velocity integrated, m) at time `t`; `held`: the baro is withheld
+    /// from the filter (the window's start is held).
+    /// Returns this sample's statistic (NaN while the window is short).
+    pub fn observe_baro(&mut self, t: f64, z: f64, held: bool) -> f64 {
+        self.baro.set_hold(held);
+        let st = self.baro.push(t, [z]);
+        if st.is_finite() {
+            self.baro_pending = if self.baro_pending.is_finite() { self.baro_pending.max(st) } else { st };
+        }
+        st
+    }
+
+    /// Forget one axis' reference and history (its sensor was re-anchored).
+    pub fn reset_axis(&mut self, axis: usize) {
+        if let Some(a) = self.axes.get_mut(axis) {
+            a.has_prev = false;
+            a.has_ref = false;
+        }
+    }
+
+    /// The last baro sample was accepted on a normal verdict: learn σ.
+    pub fn accept_baro(&mut self) {
+        self.baro.accept();
+    }
+
+    /// Feed one GPS epoch's `z = v_gps − V` (horizontal N, E; V: the
+    /// IMU-predicted velocity changes summed, m/s) at time `t`.
+    pub fn observe_imu(&mut self, t: f64, z: [f64; 2]) {
+        let st = self.imu.push(t, z);
+        if st.is_finite() {
+            self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.max(st) } else { st };
+        }
+    }
+
+    /// The epoch was normal: learn σ of the IMU consistency.
+    pub fn accept_imu(&mut self) {
+        self.imu.accept();
+    }
+
+    /// Restart the IMU (a prediction without IMU, no GPS velocity) or baro
+    /// consistency window (a filter reset).
+    pub fn clear_imu(&mut self) {
+        self.imu.clear();
+    }
+    pub fn clear_baro(&mut self) {
+        self.baro.clear();
+    }
+
     /// Residual the axis last had before the current one (for `accept`).
     pub fn previous(&self, axis: usize) -> f64 {
         self.axes.get(axis).map_or(f64::NAN, |a| a.prev)
@@ -530,6 +802,9 @@ impl IndicatorEngine {
         self.pending = [0.0; SUMS];
         self.pending_any = false;
         self.pv.clear();
+        self.baro.clear();
+        self.baro_pending = f64::NAN;
+        self.imu_pending = f64::NAN;
     }
 
     /// Close the epoch: push pending sums and compute R and C.
@@ -550,8 +825,12 @@ impl IndicatorEngine {
             c_group: [f64::NAN; GROUPS],
             inc_group: [f64::NAN; GROUPS],
             pv: self.pv.stat,
+            baro_cons: self.baro_pending,
+            imu: self.imu_pending,
         };
         let pv = core::mem::replace(&mut self.pv.stat, f64::NAN);
+        let baro = core::mem::replace(&mut self.baro_pending, f64::NAN);
+        let imu = core::mem::replace(&mut self.imu_pending, f64::NAN);
         for g in 0..GROUPS {
             let b = g * K;
             if lt[b + 1] > 0.5 && st[b + 1] > 0.5 {
@@ -560,6 +839,9 @@ impl IndicatorEngine {
                 let mut rg = rl.min(rs);
                 if g == 0 && pv.is_finite() {
                     rg = rg.max(pv);
+                }
+                if g == 2 && baro.is_finite() {
+                    rg = rg.max(baro);
                 }
                 out.r_group[g] = rg;
                 out.r = out.r.max(rg);
@@ -579,6 +861,11 @@ impl IndicatorEngine {
                 out.c = out.c.max(rho);
             }
         }
+        // The IMU consistency is reported (`imu`) but not folded into R:
+        // on the real ArduPilot Loiter log it reaches 3–6 for seconds at a
+        // time (take-off, manoeuvres), the same range a 0.3–0.5 m/s² bias
+        // gives in simulation, and would flag ~7% of that flight.
+        let _ = imu;
         self.last = out;
         out
     }
@@ -722,5 +1009,58 @@ mod tests {
         e.accept(0, prev, 0.5, 0.1);
         let d = e.observe(0, 0.1, 0.0, 0.5);
         assert_abs_diff_eq!(d, 0.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn lag_test_window_change_hold_and_restart() {
+        // T = 2 s, σ = 1 (no learning: α = 0, no baseline: τ = 0).
+        let mut l = LagTest::<1>::new(8, 2.0, 1.0, 0.5, 0.0, 0.0);
+        // Window shorter than T/2: NaN.
+        assert!(l.push(0.0, [0.0]).is_nan());
+        // t = 1: Δt = 1 ≥ T/2, Δz = 0.5 → 0.5.
+        assert_abs_diff_eq!(l.push(1.0, [0.5]), 0.5, epsilon = 1e-12);
+        // t = 2: oldest stays t = 0 (t − 1 < T), Δz = 1.0 → 1.0.
+        assert_abs_diff_eq!(l.push(2.0, [1.0]), 1.0, epsilon = 1e-12);
+        // t = 3: t = 0 evicted (3 − 1 ≥ T), oldest t = 1: Δz = 1.5 − 0.5 = 1.
+        assert_abs_diff_eq!(l.push(3.0, [1.5]), 1.0, epsilon = 1e-12);
+        // Held: oldest stays t = 1; t = 4, Δz = 4 − 0.5 = 3.5, Δt = 3,
+        // σ scaled by sqrt(3/2): 3.5 / 1.224745 = 2.857738.
+        l.set_hold(true);
+        assert_abs_diff_eq!(l.push(4.0, [4.0]), 3.5 / 1.5f64.sqrt(), epsilon = 1e-12);
+        assert_abs_diff_eq!(l.push(4.0, [4.0]), 2.857738, epsilon = 1e-6);
+        // Release restarts the window: a single entry is NaN.
+        l.set_hold(false);
+        assert!(l.push(5.0, [4.0]).is_nan());
+        // Non-finite input restarts too.
+        assert!(l.push(6.0, [f64::NAN]).is_nan());
+        assert!(l.push(7.0, [4.0]).is_nan());
+    }
+
+    #[test]
+    fn lag_test_learns_winsorised_sigma_and_floor() {
+        // σ₀ = 1, floor 0.5, α = 0.5.
+        let mut l = LagTest::<1>::new(8, 2.0, 1.0, 0.5, 0.5, 0.0);
+        l.push(0.0, [0.0]);
+        // Δz = 4 over Δt = 2: statistic 4/1 = 4; accept winsorises at 3σ:
+        // ms = 1 + 0.5·(min(16, 9) − 1) = 5 → σ = sqrt(5) = 2.236068.
+        assert_abs_diff_eq!(l.push(2.0, [4.0]), 4.0, epsilon = 1e-12);
+        l.accept();
+        assert_abs_diff_eq!(l.sigma(0), 5f64.sqrt(), epsilon = 1e-12);
+        // Short window (Δt = 1 < 0.9 T): accept learns nothing.
+        let mut s = LagTest::<1>::new(8, 2.0, 1.0, 0.5, 0.5, 0.0);
+        s.push(0.0, [0.0]);
+        s.push(1.0, [0.0]);
+        s.accept();
+        assert_abs_diff_eq!(s.sigma(0), 1.0, epsilon = 1e-12);
+        // Two clean windows of Δz = 0: ms 1 → 0.5 → 0.25, σ = 0.5 = floor;
+        // a third would give 0.354 but the floor holds σ at 0.5.
+        s.push(2.0, [0.0]);
+        s.accept();
+        s.push(4.0, [0.0]);
+        s.accept();
+        assert_abs_diff_eq!(s.sigma(0), 0.5, epsilon = 1e-12);
+        s.push(6.0, [0.0]);
+        s.accept();
+        assert_abs_diff_eq!(s.sigma(0), 0.5, epsilon = 1e-12);
     }
 }
