@@ -197,7 +197,7 @@ impl Anfis {
         if n == 0 {
             return 0.0;
         }
-        xs.iter().zip(ys).map(|(x, y)| (self.eval(x) - y).powi(2)).sum::<f64>() / n as f64
+        xs.iter().zip(ys).map(|(x, y)| { let e = self.eval(x) - y; e * e }).sum::<f64>() / n as f64
     }
 
     /// Gradient of the mean squared error w.r.t. premise parameters

@@ -415,7 +415,7 @@ impl PvTest {
             }
         }
         self.stat = if self.len == cap {
-            let z2: f64 = (0..3).map(|a| (self.sum[a] / self.sigma(a)).powi(2)).sum();
+            let z2: f64 = (0..3).map(|a| { let z = self.sum[a] / self.sigma(a); z * z }).sum();
             (z2 / 3.0).sqrt()
         } else {
             f64::NAN
@@ -564,7 +564,8 @@ impl<const D: usize> LagTest<D> {
         for a in 0..D {
             let s = z[a] - z0[a] - self.rate[a] * dt;
             self.last_s[a] = s;
-            z2 += (s / (self.sigma(a) * scale)).powi(2);
+            let z = s / (self.sigma(a) * scale);
+            z2 += z * z;
         }
         (z2 / D as f64).sqrt()
     }

@@ -720,8 +720,8 @@ impl Out {
                 s.alt = l.num(msg, GPS_ALT);
             }
             let (spd, crs) = (l.num(msg, GPS_SPD), l.num(msg, GPS_GCRS).to_radians());
-            s.vn = spd * crs.cos();
-            s.ve = spd * crs.sin();
+            s.vn = spd * libm::cos(crs);
+            s.ve = spd * libm::sin(crs);
             s.vd = l.num(msg, GPS_VZ);
             let hdop = l.num(msg, GPS_HDOP);
             if hdop > 0.0 {
@@ -945,9 +945,10 @@ fn vehicle_type(text: &str) -> Option<&'static str> {
 /// The sign is chosen with `w >= 0` so that yaw wrapping 359.9° -> 0.1°
 /// does not flip the quaternion.
 fn euler_deg_to_quat(roll: f64, pitch: f64, yaw: f64) -> [f64; 4] {
-    let (sr, cr) = (roll.to_radians() / 2.0).sin_cos();
-    let (sp, cp) = (pitch.to_radians() / 2.0).sin_cos();
-    let (sy, cy) = (yaw.to_radians() / 2.0).sin_cos();
+    // libm, not std: native and wasm must give identical bits.
+    let (sr, cr) = libm::sincos(roll.to_radians() / 2.0);
+    let (sp, cp) = libm::sincos(pitch.to_radians() / 2.0);
+    let (sy, cy) = libm::sincos(yaw.to_radians() / 2.0);
     let q = [
         cr * cp * cy + sr * sp * sy,
         sr * cp * cy - cr * sp * sy,
