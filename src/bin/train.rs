@@ -79,10 +79,21 @@ fn main() {
         battery()
             .iter()
             .map(|sc| {
-                sim::simulate(sc).unwrap_or_else(|e| {
+                let mut rows = sim::simulate(sc).unwrap_or_else(|e| {
                     eprintln!("navguard-train: {e}");
                     std::process::exit(2)
-                })
+                });
+                // Baro-stuck epochs are not fault examples: their R comes from
+                // the slow baro consistency test alone (2-3 above clean), and
+                // as D2 samples they pull the decision boundary down into the
+                // range real GPS logs reach. They are detected by the same
+                // boundary without being trained on (README, Known gaps).
+                if sc.faults.iter().any(|f| f.kind == FaultKind::BaroStuck) {
+                    for r in rows.iter_mut().filter(|r| r.label >= 0.5) {
+                        r.label = f64::NAN;
+                    }
+                }
+                rows
             })
             .collect()
     } else {
