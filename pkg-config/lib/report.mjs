@@ -97,7 +97,7 @@ export function formatReport({ sweep, kinds, clean }) {
   L.push(`TC=100 against our target (acc >= 0.99, FAR <= 0.05, MDR <= 0.02): accuracy ${ok(best.accuracy >= 0.99)}, false alarm ${ok(best.falseAlarmRate <= 0.05)}, misdetection ${ok(best.misdetectionRate <= 0.02)}`);
   if (kinds) {
     L.push('');
-    L.push('Fault kinds (paper flight, fault 120-135 s unless noted; seeds 1-3, default config):');
+    L.push('Fault kinds (paper flight, fault 120-135 s; baro-stuck inside the climb; seeds 1-3, default config):');
     L.push('  kind            | intervals detected | accuracy  false-alarm  misdetect | mean delay');
     for (const k of kinds) {
       const all = k.tp + k.fp + k.fn + k.tn;
