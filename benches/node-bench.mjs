@@ -2,7 +2,7 @@
 // whole paper scenario with retraining, .wasm size, and memory over a long
 // stream. Run: npm run bench (builds first).
 import { createRequire } from 'node:module';
-import { statSync } from 'node:fs';
+import { statSync, readdirSync, readFileSync } from 'node:fs';
 import { join, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
@@ -42,6 +42,18 @@ for (let r = 0; r < reps; r++) {
 memEnd = wasmMem();
 const longMs = performance.now() - t0;
 
+// Log parsing in wasm (readLog: parse plus column extraction), MB/s per file.
+const parse = {};
+for (const dir of ['px4', 'ardupilot']) {
+  const d = join(root, '..', 'shared', 'data', dir);
+  for (const f of readdirSync(d)) {
+    const bytes = readFileSync(join(d, f));
+    if (bytes.length < 100000) continue;
+    const ms = best(5, () => ng.readLog(bytes));
+    parse[f] = Math.round(bytes.length / 1e6 / (ms / 1000));
+  }
+}
+
 const wasmSize = statSync(join(root, 'pkg', 'navguard_bg.wasm')).size;
 const fmt = (x) => Math.round(x).toLocaleString('en-US');
 console.log(JSON.stringify({
@@ -54,5 +66,6 @@ console.log(JSON.stringify({
   memoryBytesAfter10Batches: memStart,
   memoryBytesAtEnd: memEnd,
   wasmBytes: wasmSize,
+  readLogMBPerS: parse,
 }, null, 2));
 console.error(`pushColumns ${fmt(n / (noRetrain / 1000))} rows/s, push ${fmt(n / (push / 1000))} rows/s, paper scenario ${whole.toFixed(1)} ms, .wasm ${fmt(wasmSize)} B`);
