@@ -203,7 +203,7 @@ impl<L: Borrow<LogData>> AuditRun<L> {
             warnings.push(format!("{bad_rows} bad rows skipped in all"));
         }
         let st = det.stats();
-        if st.gps_epochs == 0 {
+        if st.gps_epochs == 0 && !warnings.iter().any(|w| w.contains("GPS unavailable")) {
             warnings.push(if log.missing.iter().any(|m| m == "gps") {
                 "GPS unavailable: the log has no GPS data; no residual-based verdicts were made".into()
             } else {
