@@ -61,8 +61,12 @@ pub struct Model {
 
 impl Model {
     /// The model shipped in the crate, made by `cargo run --release --bin navguard-train`.
+    /// Parsed once per process (a few hundred µs), then cloned.
     pub fn embedded() -> Result<Model, String> {
-        serde_json::from_str(include_str!("default_model.json")).map_err(|e| format!("embedded model: {e}"))
+        static EMBEDDED: std::sync::OnceLock<Result<Model, String>> = std::sync::OnceLock::new();
+        EMBEDDED
+            .get_or_init(|| serde_json::from_str(include_str!("default_model.json")).map_err(|e| format!("embedded model: {e}")))
+            .clone()
     }
 
     /// Train a model from labelled streams: run the detector with decisions
