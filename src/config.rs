@@ -46,7 +46,7 @@ pub struct ConfigInput {
 }
 
 /// Checked configuration.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Config {
     pub tc: usize,
     pub q: usize,
@@ -62,7 +62,7 @@ pub struct Config {
 }
 
 /// Serializable mirror of the filter noise (for reports).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FilterNoiseCfg {
     pub gps_pos_sigma: f64,
     pub gps_alt_sigma: f64,
@@ -189,6 +189,30 @@ impl ConfigInput {
 }
 
 impl Config {
+    /// The input form that checks to this config (model aside): used to
+    /// re-validate a config read back from a snapshot.
+    pub fn to_input(&self) -> ConfigInput {
+        let n = &self.noise;
+        ConfigInput {
+            method: None,
+            tc: Some(self.tc as f64),
+            q: Some(self.q as f64),
+            window: Some(self.window as f64),
+            threshold: Some(self.threshold),
+            retrain: Some(self.retrain),
+            gps_pos_sigma: Some(n.gps_pos_sigma),
+            gps_alt_sigma: Some(n.gps_alt_sigma),
+            gps_vel_sigma: Some(n.gps_vel_sigma),
+            baro_sigma: Some(n.baro_sigma),
+            accel_noise: Some(n.accel_noise),
+            cv_accel_noise: Some(n.cv_accel_noise),
+            outage_timeout: self.outage_timeout,
+            max_coast: Some(self.max_coast),
+            data_gap: Some(self.data_gap),
+            model: None,
+        }
+    }
+
     pub fn filter_noise(&self) -> FilterNoise {
         let n = &self.noise;
         FilterNoise {

@@ -184,7 +184,7 @@ pub mod kind {
 }
 
 /// Per-row output.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Output {
     pub t: f64,
     /// 0 normal, 1 fault.
@@ -216,7 +216,7 @@ impl core::fmt::Display for InputError {
 }
 
 /// Counters of things worth reporting (no unbounded storage).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {
     pub rows: u64,
     pub gps_epochs: u64,
@@ -229,7 +229,7 @@ pub struct Stats {
 }
 
 /// Fixed-capacity ring buffer (database D1 or D2).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 struct Ring {
     buf: Vec<[f64; 2]>,
     head: usize,
@@ -253,6 +253,14 @@ impl Ring {
     }
     fn items(&self) -> &[[f64; 2]] {
         &self.buf[..self.len]
+    }
+    /// Indices in range and capacity `q` (a restored snapshot may be forged).
+    fn check_shape(&self, q: usize, name: &str) -> Result<(), String> {
+        let cap = self.buf.len();
+        if cap != q.max(1) || self.head >= cap || self.len > cap {
+            return Err(format!("database {name}: capacity {cap} / head {} / len {} inconsistent with q = {q}", self.head, self.len));
+        }
+        Ok(())
     }
 }
 
@@ -282,7 +290,7 @@ const CONFIDENT_NORMAL: f64 = 0.2;
 const TRAIN_LR: f64 = 0.05;
 
 /// The streaming detector.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Detector {
     cfg: Config,
     anfis: Anfis,
@@ -329,7 +337,10 @@ pub struct Detector {
     last_ind: Indicators,
     stats: Stats,
     oracle: bool,
+    /// Retraining scratch (contents do not outlive `retrain`).
+    #[serde(skip)]
     train_x: Vec<[f64; 2]>,
+    #[serde(skip)]
     train_y: Vec<f64>,
     /// The shipped model's databases D1₀ ∪ D2₀ (labels 0/1): the validation
     /// set a retrained ANFIS must not do worse on.
@@ -387,6 +398,33 @@ impl Detector {
             d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
             cfg,
         }
+    }
+
+    /// After deserializing a snapshot: check the config and every buffer's
+    /// shape against a fresh detector of that config (so a corrupt or forged
+    /// snapshot is an error, not an index panic later), and restore the
+    /// scratch buffers that snapshots do not carry.
+    pub(crate) fn check_restored(&mut self) -> Result<(), String> {
+        let checked = self.cfg.to_input().check()?;
+        if checked != self.cfg {
+            return Err("config does not validate to itself".into());
+        }
+        let q = self.cfg.q;
+        self.d1.check_shape(q, "D1")?;
+        self.d2.check_shape(q, "D2")?;
+        self.ind.check_shape(&self.cfg.indicator_settings())?;
+        if self.d0_x.len() != self.d0_y.len() {
+            return Err(format!("D0: {} samples but {} labels", self.d0_x.len(), self.d0_y.len()));
+        }
+        crate::config::check_anfis(&self.anfis).map_err(|e| format!("anfis: {e}"))?;
+        self.train_x = Vec::with_capacity(2 * q);
+        self.train_y = Vec::with_capacity(2 * q);
+        Ok(())
+    }
+
+    #[cfg(test)]
+    pub(crate) fn forge_ring_head_for_test(&mut self, head: usize) {
+        self.d1.head = head;
     }
 
     /// Teacher forcing for building training data: decisions follow the

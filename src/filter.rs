@@ -10,6 +10,7 @@
 
 #![allow(non_snake_case)] // textbook names: P, Q, F, K, C
 
+use serde::{Deserialize, Serialize};
 use nalgebra::{Matrix3, SMatrix, SVector, UnitQuaternion, Quaternion, Vector3};
 
 /// State dimension.
@@ -26,7 +27,7 @@ const IB: usize = 6; // accel-bias block start
 const IBARO: usize = 9;
 
 /// Noise settings of the filter (all 1-sigma).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FilterNoise {
     /// White accelerometer noise density used with IMU, m/s² (per sqrt(s) scaled by dt).
     pub accel: f64,
@@ -81,7 +82,7 @@ impl core::fmt::Display for FilterError {
 }
 
 /// Specific-force input for one prediction step.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 pub struct ImuInput {
     /// Specific force, body FRD, m/s².
     pub f_body: Vector3<f64>,
@@ -104,7 +105,7 @@ impl<const M: usize> Default for Innovation<M> {
 }
 
 /// Covariance transition accumulated since the last [`Kf::flush`].
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 struct Pending {
     /// Elapsed time, s.
     t: f64,
@@ -126,7 +127,7 @@ impl Default for Pending {
 }
 
 /// The filter.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Kf {
     pub x: StateVec,
     /// State covariance, current after any innovation or update call (or

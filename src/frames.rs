@@ -4,6 +4,7 @@
 //! radii at the anchor: under 1 cm error per km of distance, which is below
 //! GPS noise for any UAV flight area.
 
+use serde::{Deserialize, Serialize};
 use nalgebra::Vector3;
 
 use crate::sample::Sample;
@@ -12,7 +13,7 @@ const A: f64 = 6_378_137.0; // WGS-84 semi-major axis, m
 const E2: f64 = 6.694_379_990_14e-3; // first eccentricity squared
 
 /// Local frame origin.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Anchor {
     /// Geodetic origin (deg, deg, m), or None when the log gives NED directly.
     pub lla: Option<(f64, f64, f64)>,

@@ -111,6 +111,8 @@
 //! leaves), re-summed exactly once per window length to shed rounding, so the
 //! per-epoch cost is O(1) in `w`.
 
+use serde::{Deserialize, Serialize};
+
 /// Residual groups: GPS position, GPS velocity, barometer.
 pub const GROUPS: usize = 3;
 /// Group names as reported.
@@ -137,7 +139,7 @@ const K: usize = 5;
 const SUMS: usize = GROUPS * K;
 
 /// Fixed-capacity ring of per-epoch sums with running totals.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SlidingSum {
     buf: Vec<[f64; SUMS]>,
     head: usize,
@@ -202,7 +204,7 @@ impl SlidingSum {
 }
 
 /// Indicator values at one epoch.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Indicators {
     /// R-indicator (dimensionless, ≈1 on clean data).
     pub r: f64,
@@ -240,7 +242,7 @@ impl Indicators {
     }
 }
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 struct AxisState {
     prev: f64,
     r_ref: f64,
@@ -255,7 +257,7 @@ struct AxisState {
 }
 
 /// Settings for the indicator computation.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct IndicatorSettings {
     /// Window length, epochs.
     pub window: usize,
@@ -277,7 +279,7 @@ impl Default for IndicatorSettings {
 pub const PV_WINDOW_FACTOR: usize = 5;
 
 /// Sliding-window indicator engine. Allocates only at construction.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct IndicatorEngine {
     set: IndicatorSettings,
     axes: [AxisState; AXES],
@@ -295,7 +297,7 @@ pub struct IndicatorEngine {
 }
 
 /// Position–velocity consistency over a long window (see the module docs).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 struct PvTest {
     ring: Vec<[f64; 3]>,
     head: usize,
@@ -445,7 +447,10 @@ impl PvTest {
 /// Sensor-versus-model consistency over a time window (see the module docs):
 /// the change of `z = sensor − model` over the last `T` seconds, per axis,
 /// normalised by a learnt σ. `D` axes, ring of `cap` entries.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
+// serde implements arrays per length, not for a generic `D`: state the bound
+// so the impls exist for the lengths used (1 and 2).
+#[serde(bound(serialize = "[f64; D]: Serialize", deserialize = "[f64; D]: Deserialize<'de>"))]
 pub struct LagTest<const D: usize> {
     ring: Vec<(f64, [f64; D])>,
     head: usize,
@@ -641,6 +646,29 @@ impl IndicatorEngine {
 
     pub fn settings(&self) -> &IndicatorSettings {
         &self.set
+    }
+
+    /// Every ring's capacity and indices match a fresh engine with settings
+    /// `set` (a restored snapshot may be corrupt or forged).
+    pub(crate) fn check_shape(&self, set: &IndicatorSettings) -> Result<(), String> {
+        if self.set != *set {
+            return Err("indicator settings do not match the config".into());
+        }
+        let fresh = IndicatorEngine::new(*set);
+        let ring = |name: &str, cap: usize, want: usize, head: usize, len: usize| {
+            if cap != want || head >= cap || len > cap {
+                Err(format!("indicator window {name}: capacity {cap} / head {head} / len {len}, expected capacity {want}"))
+            } else {
+                Ok(())
+            }
+        };
+        ring("long", self.long.buf.len(), fresh.long.buf.len(), self.long.head, self.long.len)?;
+        ring("short", self.short.buf.len(), fresh.short.buf.len(), self.short.head, self.short.len)?;
+        ring("pv", self.pv.ring.len(), fresh.pv.ring.len(), self.pv.head, self.pv.len)?;
+        ring("pv.inc", self.pv.inc_cap, fresh.pv.inc_cap, self.pv.inc_head, self.pv.inc_len)?;
+        ring("baro", self.baro.ring.len(), fresh.baro.ring.len(), self.baro.head, self.baro.len)?;
+        ring("imu", self.imu.ring.len(), fresh.imu.ring.len(), self.imu.head, self.imu.len)?;
+        Ok(())
     }
 
     /// σ_Δ currently used for an axis.

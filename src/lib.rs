@@ -15,6 +15,7 @@ pub mod logs;
 pub mod metrics;
 pub mod sample;
 pub mod sim;
+pub mod snapshot;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
