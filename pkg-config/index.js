@@ -17,6 +17,16 @@ class Detector extends core.Detector {
     this._out = new Float64Array(7);
   }
 
+  // The wasm static returns a plain core.Detector; give it this class's
+  // fast `push` and buffers.
+  static restore(snapshot) {
+    const d = core.Detector.restore(snapshot);
+    Object.setPrototypeOf(d, Detector.prototype);
+    d._row = new Float64Array(N);
+    d._out = new Float64Array(7);
+    return d;
+  }
+
   push(sample) {
     if (sample === null || typeof sample !== 'object') {
       throw new Error(`row ${this.rowCount()}: sample must be a plain object`);

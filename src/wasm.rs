@@ -124,6 +124,7 @@ export interface AuditReport {
 }
 /** Residual columns: GPS position N/E/D (m), velocity N/E/D (m/s), baro (m); NaN on rows without that measurement. */
 export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array; rPn: Float64Array; rPe: Float64Array; rPd: Float64Array; rVn: Float64Array; rVe: Float64Array; rVd: Float64Array; rBaro: Float64Array } }
+export interface SnapshotInfo { version: number; crateVersion: string; bytes: number }
 export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][]; topicCounts: [string, number][] }
 "#;
 
@@ -313,6 +314,28 @@ impl Detector {
     pub fn config(&self) -> Result<JsValue, JsError> {
         serde_wasm_bindgen::to_value(self.inner.config()).map_err(err)
     }
+
+    /// The whole detector state (filter, windows, D1/D2, ANFIS, counters,
+    /// config) as versioned bytes: store it (IndexedDB, a file) and resume
+    /// with `Detector.restore`.
+    pub fn snapshot(&self) -> Result<Uint8Array, JsError> {
+        let bytes = self.inner.snapshot().map_err(err)?;
+        Ok(Uint8Array::from(&bytes[..]))
+    }
+
+    /// A detector resumed from `snapshot()` bytes; its outputs continue
+    /// bit-identical to the snapshotted one's. Throws on a damaged snapshot
+    /// or one of another format version.
+    pub fn restore(snapshot: &[u8]) -> Result<Detector, JsError> {
+        let inner = CoreDetector::restore(snapshot).map_err(err)?;
+        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new() })
+    }
+}
+
+/// A snapshot's header: `{ version, crateVersion, bytes }` (checksum verified).
+#[wasm_bindgen(js_name = snapshotInfo, unchecked_return_type = "SnapshotInfo")]
+pub fn snapshot_info(snapshot: &[u8]) -> Result<JsValue, JsError> {
+    serde_wasm_bindgen::to_value(&crate::snapshot::info(snapshot).map_err(err)?).map_err(err)
 }
 
 fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue, JsError> {

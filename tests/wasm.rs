@@ -145,6 +145,49 @@ fn bad_input_throws_and_the_detector_keeps_working() {
     assert_eq!(get(&d.stats().unwrap(), "rows").as_f64(), Some(2.0));
 }
 
+/// Snapshot mid-flight (inside the second outage, retraining under way),
+/// drop the detector, restore from the bytes and finish the scenario: the
+/// statuses and F values equal an uninterrupted run's, bit for bit.
+#[wasm_bindgen_test]
+fn snapshot_and_restore_resume_bit_identically() {
+    let (cols, t, _) = scenario("paper", 4);
+    let cfg = || config(&[("tc", 20.0)]);
+    let mut whole = Detector::new(cfg()).unwrap();
+    let out = whole.push_columns(&cols).unwrap();
+    let st = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
+    let f = get(&out, "f").dyn_into::<Float64Array>().unwrap().to_vec();
+    let cut = t.iter().position(|&x| x >= 105.0).unwrap() as u32;
+    let part = |a: u32, b: u32| {
+        let o = Object::new();
+        for k in Object::keys(cols.unchecked_ref::<Object>()).iter() {
+            let arr = Reflect::get(&cols, &k).unwrap().dyn_into::<Float64Array>().unwrap();
+            Reflect::set(&o, &k, &arr.subarray(a, b)).unwrap();
+        }
+        JsValue::from(o)
+    };
+    let mut first = Detector::new(cfg()).unwrap();
+    let o1 = first.push_columns(&part(0, cut)).unwrap();
+    let snap = first.snapshot().unwrap().to_vec();
+    drop(first);
+    let info = navguard::wasm::snapshot_info(&snap).unwrap();
+    assert_eq!(get(&info, "version").as_f64(), Some(navguard::snapshot::VERSION as f64));
+    let mut second = Detector::restore(&snap).unwrap();
+    let o2 = second.push_columns(&part(cut, t.len() as u32)).unwrap();
+    let mut st2 = get(&o1, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
+    st2.extend(get(&o2, "status").dyn_into::<Uint8Array>().unwrap().to_vec());
+    let mut f2 = get(&o1, "f").dyn_into::<Float64Array>().unwrap().to_vec();
+    f2.extend(get(&o2, "f").dyn_into::<Float64Array>().unwrap().to_vec());
+    assert_eq!(st, st2);
+    assert!(f.iter().zip(&f2).all(|(a, b)| a.to_bits() == b.to_bits()), "F differs after restore");
+    assert!(get(&whole.stats().unwrap(), "retrains").as_f64().unwrap() > 0.0, "no retraining exercised");
+    assert_eq!(get(&second.stats().unwrap(), "rows").as_f64(), Some(t.len() as f64));
+    // A damaged snapshot is an Error, not a panic.
+    let mut bad = snap.clone();
+    bad[snap.len() / 3] ^= 1;
+    let e: JsValue = Detector::restore(&bad).err().unwrap().into();
+    assert!(get(&e, "message").as_string().unwrap().contains("checksum"));
+}
+
 fn web_sys_log(s: &str) {
     wasm_bindgen_test::console_log!("{}", s);
 }

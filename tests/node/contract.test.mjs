@@ -55,6 +55,39 @@ test('pushColumns in several batches equals one batch', () => {
   assert.deepEqual(Uint8Array.from(parts), whole.status);
 });
 
+test('snapshot, Detector.restore and continue equals an uninterrupted run (object push)', () => {
+  const { cols } = columns('step', 6);
+  const names = Object.keys(cols);
+  const n = cols.t.length;
+  const row = (i) => {
+    const s = {};
+    for (const k of names) if (!Number.isNaN(cols[k][i])) s[k] = cols[k][i];
+    return s;
+  };
+  const whole = new ng.Detector({ tc: 20 });
+  const ref = [];
+  for (let i = 0; i < n; i++) ref.push(whole.push(row(i)));
+  let det = new ng.Detector({ tc: 20 });
+  const got = [];
+  for (const cut of [Math.floor(n / 3), Math.floor((2 * n) / 3), n]) {
+    while (got.length < cut) got.push(det.push(row(got.length)));
+    const snap = det.snapshot();
+    assert.ok(snap instanceof Uint8Array && snap.length > 1000);
+    assert.equal(ng.snapshotInfo(snap).version, 1);
+    det.free();
+    det = ng.Detector.restore(snap);
+    assert.ok(det instanceof ng.Detector);
+    assert.equal(det.rowCount(), cut);
+  }
+  for (let i = 0; i < n; i++) {
+    assert.equal(got[i].status, ref[i].status, `row ${i}`);
+    assert.ok(Object.is(got[i].f, ref[i].f), `row ${i}: f ${got[i].f} vs ${ref[i].f}`);
+  }
+  assert.ok(ref.some((r) => r.status === 1), 'the step scenario raised no fault');
+  assert.throws(() => ng.Detector.restore(new Uint8Array([1, 2, 3])), /snapshot/);
+  whole.free(); det.free();
+});
+
 test('bad input throws an Error naming field and row; the detector stays usable', () => {
   const det = new ng.Detector();
   det.push({ t: 0, lat: 31.94, lon: 118.79, alt: 20 });
