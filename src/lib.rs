@@ -15,6 +15,9 @@ pub mod logs;
 pub mod metrics;
 pub mod sample;
 pub mod sim;
+pub mod thresholds;
+pub mod ugv;
+pub mod tight;
 pub mod snapshot;
 
 #[cfg(target_arch = "wasm32")]

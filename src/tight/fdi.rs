@@ -1,0 +1,531 @@
+//! Fault detection (Appendix A), isolation (Appendix B), adaptation
+//! (Appendix C), RDPOP (eq. 26) and the RDPOP switch between isolation and
+//! measurement reconstruction (eq. 27) of Shen et al. 2022.
+//!
+//! All functions work on a [`Linearized`] measurement set (innovations `v`,
+//! `H`, `R`) and the predicted covariance `P_{k,k−1}`; `P_v = H P Hᵀ + R`.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{DMatrix, DVector};
+use serde::{Deserialize, Serialize};
+
+use super::tc_ekf::{Linearized, Mat17, PrMeas, TcEkf, N, POS};
+use super::TightError;
+
+/// Upper-tail standard normal quantile: `x` with `P(Z > x) = p`, `0 < p < 1`.
+/// Bisection on `erfc` (libm), so identical on every target.
+pub fn normal_upper_quantile(p: f64) -> Result<f64, TightError> {
+    if !(p > 0.0 && p < 1.0) {
+        return Err(TightError::new("p", format!("must be in (0, 1), got {p}")));
+    }
+    let q = |x: f64| 0.5 * libm::erfc(x / core::f64::consts::SQRT_2);
+    let (mut lo, mut hi) = (-40.0f64, 40.0f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if q(mid) > p {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(0.5 * (lo + hi))
+}
+
+/// Detection threshold `T1 = N_{α/2}(0, 1)` for the two-sided test of eq. A3
+/// at false-alarm rate `α` (α = 0.001 gives 3.29).
+pub fn threshold_t1(alpha: f64) -> Result<f64, TightError> {
+    if !(alpha > 0.0 && alpha < 1.0) {
+        return Err(TightError::new("alpha", format!("must be in (0, 1), got {alpha}")));
+    }
+    normal_upper_quantile(alpha / 2.0)
+}
+
+/// Chi-square quantile (lower tail probability `p`, `k` degrees of freedom),
+/// Wilson–Hilferty approximation (relative error < 1 % for k ≥ 3).
+pub fn chi2_quantile(p: f64, k: f64) -> Result<f64, TightError> {
+    if !(k > 0.0 && k.is_finite()) {
+        return Err(TightError::new("k", format!("must be finite and > 0, got {k}")));
+    }
+    let z = -normal_upper_quantile(p)?;
+    let a = 2.0 / (9.0 * k);
+    let c = 1.0 - a + z * libm::sqrt(a);
+    Ok(k * c * c * c)
+}
+
+/// Normalized innovations (eq. A2): `λ_i = c_iᵀ P_v⁻¹ v / √(c_iᵀ P_v⁻¹ c_i)`.
+/// Each is N(0, 1) when fault-free. `None` if `P_v` is not positive definite.
+pub fn w_test(pv: &DMatrix<f64>, v: &DVector<f64>) -> Option<DVector<f64>> {
+    let inv = pv.clone().cholesky()?.inverse();
+    let y = &inv * v;
+    let mut lam = DVector::zeros(v.len());
+    for i in 0..v.len() {
+        let d = inv[(i, i)];
+        if !(d > 0.0) {
+            return None;
+        }
+        lam[i] = y[i] / libm::sqrt(d);
+    }
+    Some(lam)
+}
+
+/// A satellite flagged by the test.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Detection {
+    /// Row in the measurement set.
+    pub index: usize,
+    pub prn: u8,
+    /// Its normalized innovation λ (signed).
+    pub lambda: f64,
+}
+
+/// The row with the largest |λ| if it exceeds `t1` (single-fault assumption).
+pub fn detect(lambdas: &DVector<f64>, prns: &[u8], t1: f64) -> Option<Detection> {
+    let (mut best, mut best_abs) = (None, t1);
+    for (i, &l) in lambdas.iter().enumerate() {
+        if l.abs() > best_abs {
+            best_abs = l.abs();
+            best = Some(Detection { index: i, prn: prns[i], lambda: l });
+        }
+    }
+    best
+}
+
+/// Updated covariance `P_k = P − P Hᵀ (H P Hᵀ + R)⁻¹ H P` (eq. 9 / A6).
+pub fn updated_covariance(p_pred: &Mat17, lin: &Linearized) -> Option<Mat17> {
+    if lin.is_empty() {
+        return Some(*p_pred);
+    }
+    let p = DMatrix::from_column_slice(N, N, p_pred.as_slice());
+    let pht = &p * lin.h.transpose();
+    let s = &lin.h * &pht + &lin.r;
+    let s_inv = s.cholesky()?.inverse();
+    let pk = &p - &pht * s_inv * pht.transpose();
+    Some(Mat17::from_column_slice(pk.as_slice()))
+}
+
+/// Fault isolation (Appendix B): the measurement set without row `i`
+/// (eq. A5) and the covariance `P̃_k^i` of the estimate without it (eq. A6).
+pub fn isolate(p_pred: &Mat17, lin: &Linearized, i: usize) -> Option<(Linearized, Mat17)> {
+    if i >= lin.len() {
+        return None;
+    }
+    let reduced = lin.without(i);
+    let p = updated_covariance(p_pred, &reduced)?;
+    Some((reduced, p))
+}
+
+/// Fault estimate of row `i` (eqs. C2–C3): `∇̂ = (e_iᵀ P_v⁻¹ e_i)⁻¹ e_iᵀ P_v⁻¹ v`
+/// (m) and its variance `P_∇ = (e_iᵀ P_v⁻¹ e_i)⁻¹` (m²).
+pub fn fault_estimate(pv: &DMatrix<f64>, v: &DVector<f64>, i: usize) -> Option<(f64, f64)> {
+    if i >= v.len() {
+        return None;
+    }
+    let inv = pv.clone().cholesky()?.inverse();
+    let d = inv[(i, i)];
+    if !(d > 0.0) {
+        return None;
+    }
+    let y = (&inv * v)[i];
+    Some((y / d, 1.0 / d))
+}
+
+/// Fault adaptation (Appendix C): `Z' = Z − e_i ∇̂` (eq. C4) with noise
+/// covariance `R' ≈ R + e_i P_∇ e_iᵀ`. Updating with the returned set is the
+/// gain form of eqs. C5–C6. Also returns `(∇̂, P_∇)`.
+pub fn adapt(lin: &Linearized, pv: &DMatrix<f64>, i: usize) -> Option<(Linearized, f64, f64)> {
+    let (nabla, var) = fault_estimate(pv, &lin.v, i)?;
+    let mut out = lin.clone();
+    out.v[i] -= nabla;
+    out.r[(i, i)] += var;
+    Some((out, nabla, var))
+}
+
+/// Relative differential precision of positioning of row `i` (eq. 26):
+/// `(Σ_{j=7..9} P̃_k^i[jj] − Σ P_k[jj]) / Σ P_k[jj]`, the relative growth of
+/// the position variance when satellite `i` is isolated.
+pub fn rdpop(p_pred: &Mat17, lin: &Linearized, i: usize) -> Option<f64> {
+    let full = updated_covariance(p_pred, lin)?;
+    let (_, iso) = isolate(p_pred, lin, i)?;
+    let tr = |m: &Mat17| (POS..POS + 3).map(|j| m[(j, j)]).sum::<f64>();
+    let base = tr(&full);
+    if !(base > 0.0) {
+        return None;
+    }
+    Some((tr(&iso) - base) / base)
+}
+
+/// Reconstructed pseudo-range.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Reconstruction {
+    /// Pseudo-range, m.
+    pub pr: f64,
+    /// Its error variance, m².
+    pub variance: f64,
+}
+
+/// Predictor of a satellite's pseudo-range, used to reconstruct a faulty
+/// measurement. The GAN generator of the next issue implements this trait.
+pub trait RangePredictor {
+    /// A measurement accepted as fault-free at time `t` (s): the measured
+    /// pseudo-range and the filter's predicted one (INS position + clock), m.
+    fn observe(&mut self, t: f64, prn: u8, measured: f64, predicted: f64);
+    /// Pseudo-range of `prn` at time `t`, given the filter's predicted
+    /// pseudo-range now; `None` when it cannot predict (then isolate).
+    fn reconstruct(&mut self, t: f64, prn: u8, predicted: f64) -> Option<Reconstruction>;
+    /// Short name for reports.
+    fn name(&self) -> &'static str;
+}
+
+/// The filter's own prediction, in the form of the paper's eq. 12 with a zero
+/// generated increment difference: `ρ̂_G(k) = ρ_G(k0) + [ρ_I(k) − ρ_I(k0)]`,
+/// i.e. the filter-predicted pseudo-range now plus the (smoothed) offset
+/// between measurement and prediction while the satellite was healthy.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FilterPredictor {
+    /// Weight of the newest offset in its exponential average (0, 1].
+    pub smoothing: f64,
+    /// Variance at age 0, m².
+    pub base_variance: f64,
+    /// Growth of the standard deviation with the age of the last healthy
+    /// measurement, m/s (an unmodelled increment difference).
+    pub sigma_rate: f64,
+    /// Refuse to predict from history older than this, s.
+    pub max_age: f64,
+    /// prn -> (time of last healthy measurement, smoothed offset m).
+    history: BTreeMap<u8, (f64, f64)>,
+}
+
+impl FilterPredictor {
+    pub fn new(base_variance: f64) -> Self {
+        FilterPredictor { smoothing: 0.2, base_variance, sigma_rate: 0.05, max_age: 120.0, history: BTreeMap::new() }
+    }
+}
+
+impl RangePredictor for FilterPredictor {
+    fn observe(&mut self, t: f64, prn: u8, measured: f64, predicted: f64) {
+        let off = measured - predicted;
+        let a = self.smoothing;
+        let e = self.history.entry(prn).or_insert((t, off));
+        *e = (t, (1.0 - a) * e.1 + a * off);
+    }
+    fn reconstruct(&mut self, t: f64, prn: u8, predicted: f64) -> Option<Reconstruction> {
+        let &(t0, off) = self.history.get(&prn)?;
+        let age = t - t0;
+        if !(age >= 0.0 && age <= self.max_age) {
+            return None;
+        }
+        let s = self.sigma_rate * age;
+        Some(Reconstruction { pr: predicted + off, variance: self.base_variance + s * s })
+    }
+    fn name(&self) -> &'static str {
+        "filter-prediction"
+    }
+}
+
+/// How a detected fault is handled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Strategy {
+    /// No detection: every pseudo-range is used (the fault-free reference
+    /// when no fault is injected).
+    None,
+    /// FDI: detection (Appendix A) then isolation (Appendix B).
+    Fdi,
+    /// FDA: detection then adaptation (Appendix C, DIA style).
+    Fda,
+    /// Detection then RDPOP switch (eq. 27): reconstruct when RDPOP > η,
+    /// else isolate.
+    Switch,
+}
+
+impl Strategy {
+    pub fn name(self) -> &'static str {
+        match self {
+            Strategy::None => "none",
+            Strategy::Fdi => "FDI",
+            Strategy::Fda => "FDA",
+            Strategy::Switch => "RDPOP-switch",
+        }
+    }
+}
+
+/// What was done with the epoch's measurements.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Action {
+    /// No pseudo-ranges: time update only.
+    NoMeasurements,
+    /// All pseudo-ranges used.
+    UpdateAll,
+    /// The flagged satellite was left out.
+    Isolate,
+    /// The flagged satellite was adapted.
+    Adapt,
+    /// The flagged satellite was replaced by the predictor's pseudo-range.
+    Reconstruct,
+    /// The update was rejected (innovation covariance not positive definite).
+    Rejected,
+}
+
+/// The outcome of one GNSS epoch.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EpochDecision {
+    /// (prn, λ) for every satellite of the epoch.
+    pub lambdas: Vec<(u8, f64)>,
+    /// Largest |λ|.
+    pub lambda_max: f64,
+    pub detection: Option<Detection>,
+    /// RDPOP of the flagged satellite.
+    pub rdpop: Option<f64>,
+    pub action: Action,
+}
+
+/// Detection parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FdsrConfig {
+    pub strategy: Strategy,
+    /// False-alarm rate α of the λ test.
+    pub alpha: f64,
+    /// RDPOP threshold η of eq. 27.
+    pub eta: f64,
+}
+
+impl Default for FdsrConfig {
+    fn default() -> Self {
+        FdsrConfig { strategy: Strategy::Switch, alpha: 0.001, eta: 0.1 }
+    }
+}
+
+impl FdsrConfig {
+    pub fn check(&self) -> Result<f64, TightError> {
+        if !(self.eta.is_finite() && self.eta >= 0.0) {
+            return Err(TightError::new("eta", format!("must be finite and >= 0, got {}", self.eta)));
+        }
+        threshold_t1(self.alpha)
+    }
+}
+
+/// One GNSS epoch of detection and reconfiguration followed by the filter
+/// update. `t1` is [`threshold_t1`] of `cfg.alpha`.
+pub fn process_epoch(
+    ekf: &mut TcEkf,
+    meas: &[PrMeas],
+    cfg: &FdsrConfig,
+    t1: f64,
+    predictor: &mut dyn RangePredictor,
+    t: f64,
+) -> EpochDecision {
+    let lin = ekf.linearize(meas);
+    let mut out = EpochDecision {
+        lambdas: Vec::new(),
+        lambda_max: 0.0,
+        detection: None,
+        rdpop: None,
+        action: Action::NoMeasurements,
+    };
+    if lin.is_empty() {
+        return out;
+    }
+    let pv = ekf.innovation_cov(&lin);
+    let Some(lam) = w_test(&pv, &lin.v) else {
+        out.action = Action::Rejected;
+        return out;
+    };
+    out.lambdas = lin.prns.iter().zip(lam.iter()).map(|(&p, &l)| (p, l)).collect();
+    out.lambda_max = lam.iter().fold(0.0f64, |m, l| m.max(l.abs()));
+    let det = if cfg.strategy == Strategy::None { None } else { detect(&lam, &lin.prns, t1) };
+    out.detection = det;
+    let flagged = det.map(|d| d.index);
+    // Healthy satellites feed the predictor's history.
+    for i in 0..lin.len() {
+        if Some(i) != flagged {
+            predictor.observe(t, lin.prns[i], lin.predicted[i] + lin.v[i], lin.predicted[i]);
+        }
+    }
+    let (used, action) = match det {
+        None => (Some(lin.clone()), Action::UpdateAll),
+        Some(d) => {
+            out.rdpop = rdpop(&ekf.p, &lin, d.index);
+            match cfg.strategy {
+                Strategy::None => (Some(lin.clone()), Action::UpdateAll),
+                Strategy::Fdi => (Some(lin.without(d.index)), Action::Isolate),
+                Strategy::Fda => match adapt(&lin, &pv, d.index) {
+                    Some((a, _, _)) => (Some(a), Action::Adapt),
+                    None => (Some(lin.without(d.index)), Action::Isolate),
+                },
+                Strategy::Switch => {
+                    let rec = if out.rdpop.is_some_and(|r| r > cfg.eta) {
+                        predictor.reconstruct(t, d.prn, lin.predicted[d.index])
+                    } else {
+                        None
+                    };
+                    match rec {
+                        Some(r) => {
+                            let mut l = lin.clone();
+                            l.v[d.index] = r.pr - lin.predicted[d.index];
+                            l.r[(d.index, d.index)] = r.variance;
+                            (Some(l), Action::Reconstruct)
+                        }
+                        None => (Some(lin.without(d.index)), Action::Isolate),
+                    }
+                }
+            }
+        }
+    };
+    out.action = action;
+    if let Some(u) = used {
+        if !u.is_empty() && ekf.update(&u).is_none() {
+            out.action = Action::Rejected;
+        }
+    }
+    out
+}
+
+#[cfg(all(test, not(target_arch = "wasm32")))]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    /// A hand-made measurement set: rows are unit vectors on the given
+    /// error-state indices, R = r·I.
+    fn lin(rows: &[usize], v: &[f64], r: f64) -> Linearized {
+        let n = rows.len();
+        let mut h = DMatrix::zeros(n, N);
+        for (i, &k) in rows.iter().enumerate() {
+            h[(i, k)] = 1.0;
+        }
+        Linearized {
+            prns: (1..=n as u8).collect(),
+            v: DVector::from_column_slice(v),
+            h,
+            r: DMatrix::from_diagonal_element(n, n, r),
+            predicted: vec![0.0; n],
+        }
+    }
+
+    #[test]
+    fn t1_from_alpha() {
+        assert_relative_eq!(threshold_t1(0.001).unwrap(), 3.290_526_731, epsilon = 1e-8);
+        assert_relative_eq!(threshold_t1(0.05).unwrap(), 1.959_963_985, epsilon = 1e-8);
+        // The paper's 2.88 corresponds to a one-sided 0.002.
+        assert_relative_eq!(normal_upper_quantile(0.002).unwrap(), 2.878_161_739, epsilon = 1e-8);
+        assert!(threshold_t1(0.0).is_err());
+        assert!(threshold_t1(f64::NAN).unwrap_err().to_string().contains("alpha"));
+        // Wilson–Hilferty against tabulated chi-square quantiles.
+        assert_relative_eq!(chi2_quantile(0.975, 10.0).unwrap(), 20.483, max_relative = 0.005);
+        assert_relative_eq!(chi2_quantile(0.025, 100.0).unwrap(), 74.222, max_relative = 0.005);
+    }
+
+    #[test]
+    fn w_test_hand_cases() {
+        // Diagonal P_v = diag(4, 9), v = (2, 9): λ = (2/2, 9/3).
+        let pv = DMatrix::from_diagonal(&DVector::from_column_slice(&[4.0, 9.0]));
+        let l = w_test(&pv, &DVector::from_column_slice(&[2.0, 9.0])).unwrap();
+        assert_relative_eq!(l[0], 1.0, epsilon = 1e-12);
+        assert_relative_eq!(l[1], 3.0, epsilon = 1e-12);
+        // Correlated: P_v = [[2,1],[1,2]], P_v⁻¹ = [[2,−1],[−1,2]]/3, v = (3, 0):
+        // P_v⁻¹ v = (2, −1), (P_v⁻¹)_ii = 2/3 -> λ = (2, −1)/√(2/3).
+        let pv = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
+        let l = w_test(&pv, &DVector::from_column_slice(&[3.0, 0.0])).unwrap();
+        let s = (2.0f64 / 3.0).sqrt();
+        assert_relative_eq!(l[0], 2.0 / s, epsilon = 1e-12);
+        assert_relative_eq!(l[1], -1.0 / s, epsilon = 1e-12);
+        // Detection at T1 = 2.0: row 0 (2.449 > 2); none at T1 = 3.29.
+        let d = detect(&l, &[7, 9], 2.0).unwrap();
+        assert_eq!((d.index, d.prn), (0, 7));
+        assert!(detect(&l, &[7, 9], 3.29).is_none());
+        // Not positive definite -> None.
+        let bad = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
+        assert!(w_test(&bad, &DVector::from_column_slice(&[1.0, 1.0])).is_none());
+    }
+
+    #[test]
+    fn isolation_hand_case() {
+        // P = I, R = I, measurements of δp_x and δp_y: full update halves
+        // both variances; isolating row 0 leaves P_xx = 1 (eq. A6).
+        let p = Mat17::identity();
+        let l = lin(&[POS, POS + 1], &[1.0, 2.0], 1.0);
+        let full = updated_covariance(&p, &l).unwrap();
+        assert_relative_eq!(full[(POS, POS)], 0.5, epsilon = 1e-12);
+        assert_relative_eq!(full[(POS + 1, POS + 1)], 0.5, epsilon = 1e-12);
+        let (red, iso) = isolate(&p, &l, 0).unwrap();
+        assert_eq!(red.prns, vec![2]);
+        assert_relative_eq!(red.v[0], 2.0);
+        assert_relative_eq!(iso[(POS, POS)], 1.0, epsilon = 1e-12);
+        assert_relative_eq!(iso[(POS + 1, POS + 1)], 0.5, epsilon = 1e-12);
+        // Information form of eq. A6: (P⁻¹ + H̃ᵀ R̃⁻¹ H̃)⁻¹.
+        let info = DMatrix::identity(N, N) + red.h.transpose() * &red.h;
+        let inv = info.try_inverse().unwrap();
+        for i in 0..N {
+            assert_relative_eq!(inv[(i, i)], iso[(i, i)], epsilon = 1e-12);
+        }
+        assert!(isolate(&p, &l, 2).is_none());
+    }
+
+    #[test]
+    fn rdpop_hand_cases() {
+        let p = Mat17::identity();
+        // Two independent rows: trace 0.5+0.5+1 = 2 -> isolated 1+0.5+1 = 2.5.
+        let l = lin(&[POS, POS + 1], &[0.0, 0.0], 1.0);
+        assert_relative_eq!(rdpop(&p, &l, 0).unwrap(), 0.25, epsilon = 1e-12);
+        // Two redundant rows on δp_x: P_xx 1/3 -> 1/2; traces 7/3 -> 5/2.
+        let l = lin(&[POS, POS], &[0.0, 0.0], 1.0);
+        assert_relative_eq!(rdpop(&p, &l, 1).unwrap(), 1.0 / 14.0, epsilon = 1e-12);
+        // A row that does not touch position has RDPOP 0.
+        let l = lin(&[POS, 0], &[0.0, 0.0], 1.0);
+        assert_relative_eq!(rdpop(&p, &l, 1).unwrap(), 0.0, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn adaptation_hand_case() {
+        // Two redundant measurements of δp_x (P = I, R = I) with innovations
+        // (0, 6): P_v = [[2,1],[1,2]], P_v⁻¹ v = (−2, 4), (P_v⁻¹)_22 = 2/3,
+        // so ∇̂ = 4 / (2/3) = 6 (eq. C2) and P_∇ = 3/2 (eq. C3).
+        let p = Mat17::identity();
+        let l = lin(&[POS, POS], &[0.0, 6.0], 1.0);
+        let pv = DMatrix::from_row_slice(2, 2, &[2.0, 1.0, 1.0, 2.0]);
+        let (nabla, var) = fault_estimate(&pv, &l.v, 1).unwrap();
+        assert_relative_eq!(nabla, 6.0, epsilon = 1e-12);
+        assert_relative_eq!(var, 1.5, epsilon = 1e-12);
+        // λ_i = ∇̂ / √P_∇ (the test statistic is the standardized estimate).
+        let lam = w_test(&pv, &l.v).unwrap();
+        assert_relative_eq!(lam[1], nabla / var.sqrt(), epsilon = 1e-12);
+        let (a, _, _) = adapt(&l, &pv, 1).unwrap();
+        assert_relative_eq!(a.v[1], 0.0, epsilon = 1e-12);
+        assert_relative_eq!(a.r[(1, 1)], 2.5, epsilon = 1e-12);
+        // Eq. C6: P_k⁻¹ = P⁻¹ + Hᵀ R'⁻¹ H -> P_xx = 1/(1 + 1 + 1/2.5).
+        let pk = updated_covariance(&p, &a).unwrap();
+        assert_relative_eq!(pk[(POS, POS)], 1.0 / 2.4, epsilon = 1e-12);
+        // Eq. C5 (information form) equals the gain form: with both
+        // adapted innovations zero the state correction is zero; with v = (1, 7)
+        // the adapted v is (1, 7 − ∇̂) and δx = P_k Hᵀ R'⁻¹ v'.
+        let l2 = lin(&[POS, POS], &[1.0, 7.0], 1.0);
+        let (a2, n2, _) = adapt(&l2, &pv, 1).unwrap();
+        // P_v⁻¹ v = (2·1 − 7, −1 + 14)/3 = (−5/3, 13/3) -> ∇̂ = (13/3)/(2/3) = 6.5.
+        assert_relative_eq!(n2, 6.5, epsilon = 1e-12);
+        let dx_info = pk[(POS, POS)] * (a2.v[0] / 1.0 + a2.v[1] / 2.5);
+        let pd = DMatrix::from_column_slice(N, N, p.as_slice());
+        let s = &a2.h * &pd * a2.h.transpose() + &a2.r;
+        let k = &pd * a2.h.transpose() * s.try_inverse().unwrap();
+        let dx_gain = (&k * &a2.v)[POS];
+        assert_relative_eq!(dx_info, dx_gain, epsilon = 1e-12);
+        assert_relative_eq!(dx_info, (1.0 + 0.5 / 2.5) / 2.4, epsilon = 1e-12);
+    }
+
+    #[test]
+    fn filter_predictor_eq12() {
+        let mut fp = FilterPredictor::new(9.0);
+        assert!(fp.reconstruct(0.0, 5, 100.0).is_none());
+        fp.observe(0.0, 5, 103.0, 100.0);
+        // First offset is taken as is: ρ̂ = predicted + 3.
+        let r = fp.reconstruct(10.0, 5, 250.0).unwrap();
+        assert_relative_eq!(r.pr, 253.0);
+        assert_relative_eq!(r.variance, 9.0 + 0.25, epsilon = 1e-12);
+        // Exponential smoothing with weight 0.2: 0.8·3 + 0.2·(−2) = 2.
+        fp.observe(1.0, 5, 98.0, 100.0);
+        assert_relative_eq!(fp.reconstruct(1.0, 5, 0.0).unwrap().pr, 2.0, epsilon = 1e-12);
+        // Too old.
+        assert!(fp.reconstruct(200.0, 5, 0.0).is_none());
+    }
+}
