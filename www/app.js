@@ -1,7 +1,9 @@
 // navguard ground-station page. All heavy work (reading, parsing, detection,
 // plot-data preparation, CSV export) happens in worker.js; this module only
-// drives the UI and the uPlot charts.
+// drives the UI and the uPlot charts. The live session (streaming rows into a
+// Detector, snapshot kept in IndexedDB) is live.js with its own live-worker.js.
 import uPlot from './vendor/uPlot.esm.js';
+import { initLive } from './live.js';
 
 const $ = (sel) => document.querySelector(sel);
 const STAGES = ['reading', 'parsing', 'detecting', 'plotting'];
@@ -814,6 +816,18 @@ function init() {
 
   let rt = 0;
   new ResizeObserver(() => { clearTimeout(rt); rt = setTimeout(resize, 120); }).observe($('.timeplots'));
+
+  // live session (live.js, its own worker): uses the top bar's scenario and seed
+  initLive({
+    showError,
+    hideError,
+    readConfig,
+    scenario: () => {
+      const seed = Math.max(0, Math.floor(Number($('#seed').value) || 0));
+      const sel = $('#scenario');
+      return { name: sel.disabled ? 'paper' : sel.value, seed };
+    },
+  });
 }
 
 init();
