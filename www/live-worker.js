@@ -84,7 +84,6 @@ self.onmessage = async (ev) => {
         if (state !== 'running') break;
         state = 'paused';
         clearTimeout(timer);
-        tick();
         sendSnapshot('pause');
         break;
       case 'play':
@@ -214,7 +213,6 @@ function pump() {
   const now = performance.now();
   if (next >= n) {
     state = 'ended';
-    tick();
     sendSnapshot('end');
     post({ type: 'ended', nextRow: next, rowCount: det.rowCount(), stats: det.stats() });
     return;
@@ -286,6 +284,7 @@ function tick() {
 }
 
 function sendSnapshot(reason, id) {
+  tick(); // the page's counters never lag behind what is saved
   lastSave = performance.now();
   const snapshot = det.snapshot();
   const info = snapshotInfo(snapshot);

@@ -600,11 +600,15 @@ export function initLive(helpers) {
   document.addEventListener('visibilitychange', onVisibility);
   window.addEventListener('pagehide', onPageHide);
 
-  checkSaved();
+  checkSaved()
+    .catch((e) => ui.showError(`Saved live session: ${e.message || e}`))
+    .finally(() => { L.checked = true; });
 
   // handle for the browser test and for debugging
   window.__navguardLive = {
     get phase() { return L.phase; },
+    /** true once the stored session (if any) has been checked on load */
+    get checked() { return !!L.checked; },
     get source() { return L.source; },
     get speed() { return L.speed; },
     get config() { return L.config; },

@@ -285,3 +285,268 @@ test('a long log reports the detecting stage in several slices', async () => {
     await page.close();
   }
 });
+
+// ------------------------------------------------------------ live session
+
+const live = (page) => page.evaluate(() => {
+  const h = window.__navguardLive;
+  return {
+    phase: h.phase, startRow: h.startRow, startRowCount: h.startRowCount, startStats: h.startStats, resumed: h.resumed,
+    nextRow: h.nextRow, totalRows: h.totalRows, rowCount: h.rowCount, stats: h.stats, saves: h.saves, lastSaved: h.lastSaved,
+    info: h.info, draws: h.draws, plotPoints: h.plotPoints, speed: h.speed,
+  };
+});
+
+// The stored record (IndexedDB "navguard" / "live-session" / "current"), bytes as a plain array.
+const readSaved = (page) => page.evaluate(async () => {
+  const r = await window.__navguardLive.readSaved();
+  if (r === undefined) return null;
+  return { ...r, snapshot: r.snapshot instanceof Uint8Array ? Array.from(r.snapshot) : r.snapshot };
+});
+
+async function reloadForOffer(page) {
+  await page.reload();
+  await page.waitForFunction(() => window.__navguardLive && window.__navguardLive.checked, null, { timeout: 30000 });
+}
+
+async function startLiveScenario(page, scenario, seed, speed) {
+  await page.selectOption('#scenario', scenario);
+  await page.fill('#seed', String(seed));
+  await page.selectOption('#live-source', 'sim');
+  await page.selectOption('#live-speed', String(speed));
+  await page.waitForFunction(() => !document.querySelector('#live-start').disabled, null, { timeout: 30000 });
+  await page.click('#live-start');
+  await page.waitForFunction(() => window.__navguardLive.phase === 'running', null, { timeout: 30000 });
+}
+
+test('live session: snapshot kept in IndexedDB, resumed after a reload and continuing bit-identically', async (t) => {
+  const { page, errors } = await openPage();
+  try {
+    const t0 = Date.now();
+    // "paper" seed 1: 12 500 rows at 50 Hz over 250 s, first retrain near row 2 000;
+    // at 20x a save (every 2 s of wall time) lands every ~2 000 rows
+    await startLiveScenario(page, 'paper', 1, 20);
+    assert.equal(await page.$eval('#live-panel', (e) => e.hidden), false);
+    await page.waitForFunction(() => {
+      const h = window.__navguardLive;
+      return h.lastSaved && h.lastSaved.nextRow > 3000 && h.lastSaved.stats.retrains >= 1;
+    }, null, { timeout: 60000 });
+    const before = await live(page);
+    const wall = (Date.now() - t0) / 1000;
+    assert.equal(before.totalRows, 12500);
+    assert.ok(before.rowCount >= before.lastSaved.rowCount && before.rowCount === before.stats.rows, JSON.stringify(before));
+    assert.ok(before.saves >= 2, `saves: ${before.saves}`);
+    // rolling plot: one uPlot, redrawn at most 4 times a second, holding <= 60 s of change points
+    assert.ok(before.draws >= 2 && before.draws <= wall * 4 + 2, `${before.draws} redraws in ${wall} s`);
+    assert.ok(before.plotPoints > 100, `plot points: ${before.plotPoints}`);
+    assert.equal(await page.$$eval('#plot-live .uplot', (u) => u.length), 1);
+    // snapshot size and format version shown in the panel
+    const snapText = await page.textContent('#live-snap');
+    assert.match(snapText, new RegExp(`^${(before.info.bytes / 1024).toFixed(1)} KiB · format v1 · navguard \\d+\\.\\d+\\.\\d+`));
+    assert.ok(before.info.bytes > 10000 && before.info.version === 1, JSON.stringify(before.info));
+    await page.waitForFunction(() => /^\d\d:\d\d:\d\d · [\d,]+ rows · [2-9]\d* saves$/.test(document.querySelector('#live-saved').textContent), null, { timeout: 5000 });
+    await page.screenshot({ path: join(artifacts, 'page-live.png'), fullPage: true });
+
+    await reloadForOffer(page);
+    await page.waitForSelector('#live-offer:not([hidden])', { timeout: 10000 });
+    const saved = await readSaved(page);
+    assert.ok(saved, 'no saved live session after the reload');
+    assert.equal(saved.schema, 1);
+    assert.deepEqual({ kind: saved.source.kind, scenario: saved.source.scenario, seed: saved.source.seed, rows: saved.source.rows }, { kind: 'sim', scenario: 'paper', seed: 1, rows: 12500 });
+    assert.equal(saved.speed, 20);
+    assert.equal(saved.snapshot.length, saved.info.bytes);
+    assert.ok(saved.nextRow >= before.lastSaved.nextRow && saved.nextRow <= before.nextRow + 2000, `saved at ${saved.nextRow}, before reload ${JSON.stringify(before.lastSaved)} / ${before.nextRow}`);
+    assert.equal(saved.rowCount, saved.nextRow);
+    assert.equal(saved.stats.rows, saved.nextRow);
+    assert.ok(saved.stats.retrains >= 1, JSON.stringify(saved.stats));
+    // the offer names the saved row count and retrains
+    const offer = await page.textContent('#live-resume');
+    const hhmmss = new Date(saved.savedAt).toLocaleTimeString('en-GB', { hour12: false });
+    assert.equal(offer, `Resume live session (saved ${hhmmss}, ${saved.rowCount.toLocaleString('en-US')} rows, ${saved.stats.retrains} ${saved.stats.retrains === 1 ? 'retrain' : 'retrains'})`);
+    assert.match(await page.textContent('#live-offer-detail'), new RegExp(`next row ${saved.nextRow.toLocaleString('en-US')} of 12,500 · snapshot [\\d.]+ KiB, format v1`));
+    assert.equal(await page.$eval('#live-panel', (e) => e.hidden), true);
+
+    await page.click('#live-resume');
+    await page.waitForFunction(() => window.__navguardLive.phase === 'running', null, { timeout: 30000 });
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), true);
+    const K = 2500;
+    await page.waitForFunction((n) => window.__navguardLive.nextRow >= n, saved.nextRow + K, { timeout: 60000 });
+    const after = await live(page);
+    // (a) the row count continues from the saved index, not from 0
+    assert.equal(after.resumed, true);
+    assert.equal(after.startRow, saved.nextRow);
+    assert.equal(after.startRowCount, saved.rowCount);
+    assert.ok(after.rowCount >= saved.rowCount + K, `rows after resume: ${after.rowCount}, saved ${saved.rowCount}`);
+    assert.equal(after.rowCount, after.stats.rows);
+    // the panel follows within a redraw (at most 4 a second)
+    await page.waitForFunction((n) => Number(document.querySelector('#live-rows').textContent.replace(/,/g, '')) >= n, saved.rowCount + K, { timeout: 5000 });
+    // (b) the resumed detector's counters are the snapshotted ones
+    assert.deepEqual(after.startStats, saved.stats);
+    assert.ok(after.stats.retrains >= saved.stats.retrains && after.stats.gps_epochs > saved.stats.gps_epochs, JSON.stringify(after.stats));
+
+    // (c) outputs after the resume equal an uninterrupted detector's, computed
+    // here with the same package; a fresh detector started at the saved row
+    // (no learned state) must differ, so the comparison can fail
+    const cmp = await page.evaluate(async ({ nextRow, K, savedStats }) => {
+      const rec = await window.__navguardLive.fetchRecord();
+      const m = await import('./pkg/navguard.js');
+      await m.default();
+      const log = m.readLog(new TextEncoder().encode(m.simulate('paper', 1)));
+      const names = m.columnNames();
+      const cols = names.map((k) => log.columns[k] || null);
+      const row = new Float64Array(names.length), out = new Float64Array(8);
+      const cfg = { tc: 100, window: 10, threshold: 0.5 };
+      const ref = new m.Detector(cfg);
+      const fresh = new m.Detector(cfg);
+      const same = (a, b) => Object.is(a, b);
+      let statsAtSave = null, mismatches = 0, firstMismatch = null, freshDiffers = 0, faults = 0, kinds = {};
+      for (let i = 0; i < nextRow + K; i++) {
+        if (i === nextRow) statsAtSave = ref.stats();
+        for (let j = 0; j < cols.length; j++) row[j] = cols[j] ? cols[j][i] : NaN;
+        ref.pushRowInto(row, out);
+        if (i < nextRow) continue;
+        const j = i - nextRow;
+        const [, status, f, r, c, kind] = out;
+        faults += status;
+        kinds[kind] = (kinds[kind] || 0) + 1;
+        if (status !== rec.status[j] || kind !== rec.kind[j] || !same(f, rec.f[j]) || !same(r, rec.r[j]) || !same(c, rec.c[j])) {
+          mismatches++;
+          if (!firstMismatch) firstMismatch = { row: i, ref: [status, kind, f, r, c], live: [rec.status[j], rec.kind[j], rec.f[j], rec.r[j], rec.c[j]] };
+        }
+        fresh.pushRowInto(row, out);
+        if (!same(out[2], rec.f[j]) || out[1] !== rec.status[j]) freshDiffers++;
+      }
+      const refStats = ref.stats();
+      ref.free();
+      fresh.free();
+      return { startRow: rec.startRow, n: rec.n, statsAtSave, mismatches, firstMismatch, freshDiffers, faults, kinds, refStats, savedStats };
+    }, { nextRow: saved.nextRow, K, savedStats: saved.stats });
+    t.diagnostic(`resumed at row ${saved.nextRow} (${saved.stats.retrains} retrains); compared ${K} rows: ${cmp.faults} flagged, kinds ${JSON.stringify(cmp.kinds)}; a fresh detector differs on ${cmp.freshDiffers}`);
+    assert.equal(cmp.startRow, saved.nextRow);
+    assert.ok(cmp.n >= K, `recorded ${cmp.n} rows after the resume`);
+    assert.deepEqual(cmp.statsAtSave, saved.stats, 'the snapshot is not the uninterrupted detector at the saved row');
+    assert.equal(cmp.mismatches, 0, `outputs differ after the resume: ${JSON.stringify(cmp.firstMismatch)}`);
+    assert.ok(cmp.freshDiffers > 100, `a detector without the learned state gives the same outputs (${cmp.freshDiffers} differ): the comparison proves nothing`);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+test('live session: Discard removes the saved entry', async () => {
+  const { page, errors } = await openPage();
+  try {
+    await startLiveScenario(page, 'gps-only', 3, 10);
+    await page.waitForFunction(() => window.__navguardLive.saves >= 1, null, { timeout: 30000 });
+    await reloadForOffer(page);
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), false);
+    const saved = await readSaved(page);
+    assert.equal(saved.source.scenario, 'gps-only');
+    assert.equal(saved.source.seed, 3);
+    assert.match(await page.textContent('#live-resume'), new RegExp(` ${saved.rowCount.toLocaleString('en-US')} rows, `));
+    await page.click('#live-discard');
+    await page.waitForFunction(() => document.querySelector('#live-offer').hidden);
+    assert.equal(await readSaved(page), null);
+    await reloadForOffer(page);
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), true);
+    assert.equal(await readSaved(page), null);
+    assert.equal(await page.evaluate(() => window.__navguardLive.phase), 'idle');
+    assert.equal(await page.$eval('#error', (e) => e.hidden), true);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+// Store a live-session record made in the page: a real snapshot of a detector
+// fed `rows` rows of "paper" seed 1, passed through `damage` (a function body
+// over `s`, a Uint8Array, returning the bytes to store).
+async function storeRecord(page, rows, damage) {
+  await page.evaluate(async ({ rows, damage }) => {
+    const m = await import('./pkg/navguard.js');
+    await m.default();
+    const log = m.readLog(new TextEncoder().encode(m.simulate('paper', 1)));
+    const d = new m.Detector(undefined);
+    const cols = {};
+    for (const [k, v] of Object.entries(log.columns)) cols[k] = v.subarray(0, rows);
+    d.pushColumns(cols);
+    const stats = d.stats();
+    const s = d.snapshot();
+    d.free();
+    // helpers for `damage`: FNV-1a 64 (the snapshot checksum) and LEB128
+    const fnv = (b) => { let h = 0xcbf29ce484222325n; for (const x of b) { h ^= BigInt(x); h = (h * 0x100000001b3n) & 0xffffffffffffffffn; } return h; };
+    const varint = (v) => { const o = []; do { let b = Number(v & 0x7fn); v >>= 7n; if (v) b |= 0x80; o.push(b); } while (v); return o; };
+    const bytes = new Function('s', 'fnv', 'varint', damage)(s, fnv, varint);
+    const rec = {
+      schema: 1, snapshot: bytes, info: { version: 1, crateVersion: m.version(), bytes: bytes.length },
+      source: { kind: 'sim', scenario: 'paper', seed: 1, name: 'paper-seed1.csv', rows: log.rows },
+      nextRow: rows, rowCount: rows, stats, config: null, speed: 20, savedAt: Date.now(), reason: 'auto',
+    };
+    const db = await new Promise((res, rej) => { const r = indexedDB.open('navguard'); r.onsuccess = () => res(r.result); r.onerror = () => rej(r.error); });
+    await new Promise((res, rej) => {
+      const t = db.transaction('live-session', 'readwrite');
+      t.objectStore('live-session').put(rec, 'current');
+      t.oncomplete = res;
+      t.onerror = () => rej(t.error);
+    });
+    db.close();
+  }, { rows, damage });
+}
+
+test('live session: a damaged or foreign-version snapshot shows the error banner, is discarded, and throws nothing', async () => {
+  const { page, errors } = await openPage();
+  try {
+    // control: an intact record is offered and resumes at its row
+    await storeRecord(page, 3000, 'return s;');
+    await reloadForOffer(page);
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), false);
+    assert.match(await page.textContent('#live-resume'), /, 3,000 rows, \d+ retrains?\)$/);
+    await page.click('#live-resume');
+    await page.waitForFunction(() => window.__navguardLive.phase === 'running', null, { timeout: 30000 });
+    assert.equal(await page.evaluate(() => window.__navguardLive.startRowCount), 3000);
+    await page.click('#live-stop');
+    await page.waitForFunction(() => window.__navguardLive.phase === 'idle');
+    assert.equal(await readSaved(page), null, 'Stop did not remove the saved session');
+
+    // another format version: rejected on load by snapshotInfo, never offered
+    await storeRecord(page, 1000, 's = s.slice(); s[1 + s[0]] = 2; return s;');
+    await reloadForOffer(page);
+    let banner = await page.$eval('#error', (e) => (e.hidden ? '' : e.textContent));
+    assert.match(banner, /saved live session was discarded: snapshot: version 2 \(written by navguard [\d.]+\) cannot be read by navguard [\d.]+, which reads version 1/);
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), true);
+    assert.equal(await readSaved(page), null);
+
+    // a damaged body: the checksum catches it on load
+    await storeRecord(page, 1000, 's = s.slice(); s[s.length - 100] ^= 0x5a; return s;');
+    await reloadForOffer(page);
+    banner = await page.$eval('#error', (e) => (e.hidden ? '' : e.textContent));
+    assert.match(banner, /saved live session was discarded: snapshot: checksum mismatch/);
+    assert.equal(await readSaved(page), null);
+
+    // a truncated body with a matching checksum passes snapshotInfo, so it is
+    // offered; Detector.restore throws on Resume: banner, entry discarded
+    await storeRecord(page, 1000, `
+      let p = 1 + s[0]; p++; p += 1 + s[p];
+      let q = p; while (s[q] & 0x80) q++; q++;
+      const body = s.slice(q, q + ((s.length - q) >> 1));
+      return new Uint8Array([...s.subarray(0, p), ...varint(fnv(body)), ...body]);`);
+    await reloadForOffer(page);
+    assert.equal(await page.$eval('#error', (e) => e.hidden), true);
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), false);
+    await page.click('#live-resume');
+    await page.waitForFunction(() => !document.querySelector('#error').hidden, null, { timeout: 30000 });
+    banner = await page.textContent('#error');
+    assert.match(banner, /Could not resume the saved live session, so it was discarded: snapshot: body does not parse/);
+    assert.equal(await page.evaluate(() => window.__navguardLive.phase), 'idle');
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), true);
+    assert.equal(await page.$eval('#live-panel', (e) => e.hidden), true);
+    await page.waitForFunction(async () => (await window.__navguardLive.readSaved()) === undefined, null, { timeout: 10000 });
+    // the audit UI still works afterwards
+    await page.selectOption('#scenario', 'gps-only');
+    await page.click('#sim-run');
+    await waitDone(page);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
