@@ -550,3 +550,94 @@ test('live session: a damaged or foreign-version snapshot shows the error banner
     await page.close();
   }
 });
+
+test('live session from a log file: file kept in IndexedDB, pause saves, re-open check when the file is not stored', async () => {
+  const { page, errors } = await openPage();
+  try {
+    // 300 s of 10 Hz GPS-only flight heading north at 5 m/s
+    const lines = ['t,lat,lon,alt,vn,ve,vd,fix,sats,eph'];
+    for (let i = 0; i < 3000; i++) {
+      const t = i * 0.1;
+      lines.push(`${t.toFixed(1)},${(31.94 + (5 * t) / 111320).toFixed(9)},118.79,50,5,0,0,3,11,0.9`);
+    }
+    const csv = Buffer.from(lines.join('\n') + '\n');
+    const file = { name: 'flight.csv', mimeType: 'text/csv', buffer: csv };
+    await page.selectOption('#live-source', 'file');
+    assert.equal(await page.$eval('#live-file-row', (e) => e.hidden), false);
+    await page.setInputFiles('#live-file', file);
+    await page.selectOption('#live-speed', '10');
+    await page.click('#live-start');
+    await page.waitForFunction(() => window.__navguardLive.phase === 'running' && window.__navguardLive.saves >= 1, null, { timeout: 30000 });
+    assert.equal(await page.evaluate(() => window.__navguardLive.totalRows), 3000);
+
+    // visibilitychange to hidden stores a fresh snapshot
+    await page.evaluate(() => {
+      Object.defineProperty(document, 'visibilityState', { configurable: true, get: () => 'hidden' });
+      document.dispatchEvent(new Event('visibilitychange'));
+      delete document.visibilityState;
+    });
+    await page.waitForFunction(() => window.__navguardLive.lastSaved.reason === 'hidden', null, { timeout: 10000 });
+
+    // pausing stores the exact state: the saved row is the paused row
+    await page.click('#live-pause');
+    await page.waitForFunction(() => window.__navguardLive.lastSaved.reason === 'pause', null, { timeout: 10000 });
+    const paused = await live(page);
+    assert.equal(paused.phase, 'paused');
+    let saved = await readSaved(page);
+    assert.equal(saved.nextRow, paused.nextRow);
+    assert.equal(saved.rowCount, paused.rowCount);
+    assert.ok(saved.nextRow > 100 && saved.nextRow < 3000, `paused at ${saved.nextRow}`);
+    assert.deepEqual(saved.source, { kind: 'file', name: 'flight.csv', size: csv.length, lastModified: saved.source.lastModified, fileStored: true, rows: 3000 });
+    await page.waitForTimeout(600);
+    assert.equal((await live(page)).nextRow, paused.nextRow, 'rows kept flowing while paused');
+    const storedFile = await page.evaluate(() => new Promise((res, rej) => {
+      const r = indexedDB.open('navguard');
+      r.onerror = () => rej(r.error);
+      r.onsuccess = () => {
+        const g = r.result.transaction('live-file').objectStore('live-file').get('current');
+        g.onsuccess = () => { r.result.close(); res(g.result ? { name: g.result.name, size: g.result.size, bytes: g.result.bytes.byteLength } : null); };
+      };
+    }));
+    assert.deepEqual(storedFile, { name: 'flight.csv', size: csv.length, bytes: csv.length });
+
+    // reload: resumes from the stored file without asking for it
+    await reloadForOffer(page);
+    assert.match(await page.textContent('#live-offer-detail'), new RegExp(`flight\\.csv .* next row ${saved.nextRow.toLocaleString('en-US')} of 3,000`));
+    assert.match(await page.textContent('#live-resume'), new RegExp(` ${saved.rowCount.toLocaleString('en-US')} rows, `));
+    await page.click('#live-resume');
+    await page.waitForFunction(() => window.__navguardLive.phase === 'running', null, { timeout: 30000 });
+    let after = await live(page);
+    assert.equal(after.startRow, saved.nextRow);
+    assert.deepEqual(after.startStats, saved.stats);
+    assert.equal(after.speed, 10);
+
+    // without the stored file, Resume asks for it and checks name and size
+    await page.click('#live-pause');
+    await page.waitForFunction(() => window.__navguardLive.lastSaved && window.__navguardLive.lastSaved.reason === 'pause', null, { timeout: 10000 });
+    saved = await readSaved(page);
+    await page.evaluate(() => new Promise((res, rej) => {
+      const r = indexedDB.open('navguard');
+      r.onerror = () => rej(r.error);
+      r.onsuccess = () => { const t = r.result.transaction('live-file', 'readwrite'); t.objectStore('live-file').delete('current'); t.oncomplete = () => { r.result.close(); res(); }; };
+    }));
+    await reloadForOffer(page);
+    await page.click('#live-resume');
+    await page.waitForSelector('#live-reopen:not([hidden])', { timeout: 5000 });
+    assert.match(await page.textContent('#live-offer-detail'), new RegExp(`re-open flight\\.csv \\(${csv.length.toLocaleString('en-US')} bytes\\)`));
+    await page.setInputFiles('#live-reopen-file', { name: 'flight.csv', mimeType: 'text/csv', buffer: csv.subarray(0, csv.length - 40) });
+    await page.waitForFunction(() => !document.querySelector('#error').hidden, null, { timeout: 5000 });
+    assert.match(await page.textContent('#error'), /not the log of the saved live session: expected flight\.csv/);
+    assert.equal(await page.evaluate(() => window.__navguardLive.phase), 'idle');
+    assert.equal(await page.$eval('#live-offer', (e) => e.hidden), false);
+    assert.ok(await readSaved(page), 'a wrong file discarded the saved session');
+    await page.setInputFiles('#live-reopen-file', file);
+    await page.waitForFunction(() => window.__navguardLive.phase === 'running', null, { timeout: 30000 });
+    after = await live(page);
+    assert.equal(after.startRow, saved.nextRow);
+    assert.equal(after.startRowCount, saved.rowCount);
+    assert.equal(await page.$eval('#error', (e) => e.hidden), true);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
