@@ -7,8 +7,10 @@ use serde::Serialize;
 use crate::config::Config;
 use crate::detector::{kind, Detector, Output};
 use crate::indicators::GROUP_NAMES;
+use crate::logs::csv::CsvReader;
 use crate::logs::LogData;
 use crate::metrics::{self, Metrics};
+use crate::sample::Sample;
 
 /// One flagged interval.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -79,58 +81,190 @@ pub const RESID_NAMES: [&str; 7] = ["rPn", "rPe", "rPd", "rVn", "rVe", "rVd", "r
 
 const MAX_LISTED: usize = 1000;
 
-/// An audit in progress: feed it rows a slice at a time ([`AuditRun::step`])
-/// so a front end can report progress, then [`AuditRun::finish`].
-pub struct AuditRun<L: Borrow<LogData>> {
-    log: L,
+/// The per-row bookkeeping of an audit, whatever the rows come from: the
+/// detector, fault intervals, gaps, counters and metrics. Bounded: lists are
+/// capped at `MAX_LISTED`, everything else is a counter.
+struct Tally {
     cfg: Config,
     det: Detector,
-    next: usize,
-    cols: Columns,
-    labels: Vec<f64>,
-    any_label: bool,
+    metrics: metrics::Accumulator,
     warnings: Vec<String>,
     bad_rows: u64,
     faults: Vec<FaultInterval>,
     open: Option<FaultInterval>,
     gaps: Vec<Gap>,
+    first_t: Option<f64>,
     last_t: Option<f64>,
+    rows: usize,
     gps_reports: u64,
     gps_fixes: u64,
     flagged_epochs: u64,
+    /// Inputs seen at least once: GPS, IMU, attitude, baro.
+    seen: [bool; 4],
+}
+
+impl Tally {
+    fn new(cfg: &Config, warnings: Vec<String>) -> Result<Self, String> {
+        Ok(Tally {
+            cfg: cfg.clone(),
+            det: Detector::new(cfg.clone())?,
+            metrics: metrics::Accumulator::default(),
+            warnings,
+            bad_rows: 0,
+            faults: vec![],
+            open: None,
+            gaps: vec![],
+            first_t: None,
+            last_t: None,
+            rows: 0,
+            gps_reports: 0,
+            gps_fixes: 0,
+            flagged_epochs: 0,
+            seen: [false; 4],
+        })
+    }
+
+    /// One row (index `i` for messages). A row that fails validation is
+    /// skipped with a warning (`None`): a log is audited, not rejected, for a
+    /// few bad rows.
+    fn push(&mut self, s: &Sample, i: u64) -> Option<Output> {
+        if let Err(e) = self.det.validate(s, i) {
+            self.bad_rows += 1;
+            if self.bad_rows <= 5 {
+                self.warnings.push(format!("skipped bad row: {e}"));
+            }
+            return None;
+        }
+        if let Some(lt) = self.last_t {
+            if s.t - lt > self.cfg.data_gap && self.gaps.len() < MAX_LISTED {
+                self.gaps.push(Gap { start: lt, end: s.t });
+            }
+        }
+        self.last_t = Some(s.t);
+        self.first_t.get_or_insert(s.t);
+        self.rows += 1;
+        if s.has_position() || !s.fix.is_nan() {
+            self.gps_reports += 1;
+            self.gps_fixes += s.has_fix() as u64;
+        }
+        let seen = [s.has_position() || s.reports_no_fix(), s.has_accel(), s.has_attitude(), s.has_baro()];
+        for (a, b) in self.seen.iter_mut().zip(seen) {
+            *a |= b;
+        }
+        let o = self.det.push_valid(s);
+        if o.gps_epoch && o.status == 1 {
+            self.flagged_epochs += 1;
+        }
+        track(&mut self.open, &mut self.faults, &o, &self.det);
+        self.metrics.push(o.t, s.label, o.status);
+        Some(o)
+    }
+
+    /// Inputs never seen, by the names `LogData::missing` uses.
+    fn missing(&self) -> Vec<String> {
+        ["gps", "imu", "attitude", "baro"].iter().zip(self.seen).filter(|(_, s)| !s).map(|(n, _)| n.to_string()).collect()
+    }
+
+    fn report(self, format: &'static str, missing: Vec<String>, meta: Vec<(String, String)>) -> Report {
+        let Tally { det, metrics, mut warnings, bad_rows, mut faults, mut open, gaps, first_t, last_t, rows, gps_reports, gps_fixes, flagged_epochs, .. } = self;
+        if let Some(iv) = open.take() {
+            faults.push(iv);
+        }
+        if bad_rows > 5 {
+            warnings.push(format!("{bad_rows} bad rows skipped in all"));
+        }
+        let st = det.stats();
+        if st.gps_epochs == 0 && !warnings.iter().any(|w| w.contains("GPS unavailable")) {
+            warnings.push(if missing.iter().any(|m| m == "gps") {
+                "GPS unavailable: the log has no GPS data; no residual-based verdicts were made".into()
+            } else {
+                "GPS unavailable: no valid fix in the whole log; no residual-based verdicts were made".into()
+            });
+        }
+        for g in &gaps {
+            warnings.push(format!("data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)", g.start, g.end));
+        }
+        let duration = match (first_t, last_t) {
+            (Some(a), Some(b)) => b - a,
+            _ => 0.0,
+        };
+        let active = (duration - gaps.iter().map(|g| g.end - g.start).sum::<f64>()).max(1e-9);
+        faults.truncate(MAX_LISTED);
+        Report {
+            format,
+            rows,
+            duration_s: duration,
+            gps_epochs: st.gps_epochs,
+            gps_rate_hz: st.gps_epochs as f64 / active,
+            imu_rate_hz: st.imu_rows as f64 / active,
+            gps_available: st.gps_epochs > 0,
+            gps_fix_fraction: if gps_reports > 0 { gps_fixes as f64 / gps_reports as f64 } else { 0.0 },
+            flagged_gps_epoch_fraction: if st.gps_epochs > 0 { flagged_epochs as f64 / st.gps_epochs as f64 } else { 0.0 },
+            faults,
+            data_gaps: gaps,
+            missing,
+            warnings,
+            meta,
+            metrics: metrics.any_label.then(|| metrics.metrics()),
+            stats: st,
+        }
+    }
+}
+
+impl Columns {
+    fn with_capacity(n: usize) -> Self {
+        Columns {
+            t: Vec::with_capacity(n),
+            status: Vec::with_capacity(n),
+            f: Vec::with_capacity(n),
+            r: Vec::with_capacity(n),
+            c: Vec::with_capacity(n),
+            kind: Vec::with_capacity(n),
+            resid: core::array::from_fn(|_| Vec::with_capacity(n)),
+        }
+    }
+
+    fn push(&mut self, o: &Output, resid: &[f64; 7]) {
+        self.t.push(o.t);
+        self.status.push(o.status);
+        self.f.push(o.f);
+        self.r.push(o.r);
+        self.c.push(o.c);
+        self.kind.push(o.kind);
+        for (k, v) in resid.iter().enumerate() {
+            self.resid[k].push(*v);
+        }
+    }
+
+    /// Empty, keeping the capacity.
+    pub fn clear(&mut self) {
+        self.t.clear();
+        self.status.clear();
+        self.f.clear();
+        self.r.clear();
+        self.c.clear();
+        self.kind.clear();
+        for v in &mut self.resid {
+            v.clear();
+        }
+    }
+}
+
+/// An audit in progress: feed it rows a slice at a time ([`AuditRun::step`])
+/// so a front end can report progress, then [`AuditRun::finish`].
+pub struct AuditRun<L: Borrow<LogData>> {
+    log: L,
+    next: usize,
+    cols: Columns,
+    tally: Tally,
 }
 
 impl<L: Borrow<LogData>> AuditRun<L> {
     /// Start an audit of `log` (owned or borrowed).
     pub fn new(log: L, cfg: &Config) -> Result<Self, String> {
         let n = log.borrow().samples.len();
-        let warnings = log.borrow().warnings.clone();
-        Ok(AuditRun {
-            log,
-            cfg: cfg.clone(),
-            det: Detector::new(cfg.clone())?,
-            next: 0,
-            cols: Columns {
-                t: Vec::with_capacity(n),
-                status: Vec::with_capacity(n),
-                f: Vec::with_capacity(n),
-                r: Vec::with_capacity(n),
-                c: Vec::with_capacity(n),
-                kind: Vec::with_capacity(n),
-                resid: core::array::from_fn(|_| Vec::with_capacity(n)),
-            },
-            labels: Vec::with_capacity(n),
-            any_label: false,
-            warnings,
-            bad_rows: 0,
-            faults: vec![],
-            open: None,
-            gaps: vec![],
-            last_t: None,
-            gps_reports: 0,
-            gps_fixes: 0,
-            flagged_epochs: 0,
-        })
+        let tally = Tally::new(cfg, log.borrow().warnings.clone())?;
+        Ok(AuditRun { log, next: 0, cols: Columns::with_capacity(n), tally })
     }
 
     /// Fraction of rows processed, in [0, 1].
@@ -147,46 +281,14 @@ impl<L: Borrow<LogData>> AuditRun<L> {
         self.next >= self.log.borrow().samples.len()
     }
 
-    /// Process up to `max_rows` more rows. Rows that fail validation are
-    /// skipped with a warning: a log is audited, not rejected, for a few bad rows.
+    /// Process up to `max_rows` more rows (bad rows are skipped with a warning).
     pub fn step(&mut self, max_rows: usize) {
         let log = self.log.borrow();
         let end = self.next.saturating_add(max_rows).min(log.samples.len());
         for (i, s) in log.samples.iter().enumerate().take(end).skip(self.next) {
-            if let Err(e) = self.det.validate(s, i as u64) {
-                self.bad_rows += 1;
-                if self.bad_rows <= 5 {
-                    self.warnings.push(format!("skipped bad row: {e}"));
-                }
-                continue;
+            if let Some(o) = self.tally.push(s, i as u64) {
+                self.cols.push(&o, &self.tally.det.residuals());
             }
-            if let Some(lt) = self.last_t {
-                if s.t - lt > self.cfg.data_gap && self.gaps.len() < MAX_LISTED {
-                    self.gaps.push(Gap { start: lt, end: s.t });
-                }
-            }
-            self.last_t = Some(s.t);
-            if s.has_position() || !s.fix.is_nan() {
-                self.gps_reports += 1;
-                self.gps_fixes += s.has_fix() as u64;
-            }
-            let o = self.det.push_valid(s);
-            if o.gps_epoch && o.status == 1 {
-                self.flagged_epochs += 1;
-            }
-            track(&mut self.open, &mut self.faults, &o, &self.det);
-            let c = &mut self.cols;
-            c.t.push(o.t);
-            c.status.push(o.status);
-            c.f.push(o.f);
-            c.r.push(o.r);
-            c.c.push(o.c);
-            c.kind.push(o.kind);
-            for (k, v) in self.det.residuals().iter().enumerate() {
-                c.resid[k].push(*v);
-            }
-            self.labels.push(s.label);
-            self.any_label |= !s.label.is_nan();
         }
         self.next = end;
     }
@@ -194,57 +296,89 @@ impl<L: Borrow<LogData>> AuditRun<L> {
     /// Run what is left and build the report.
     pub fn finish(mut self) -> (Report, Columns) {
         self.step(usize::MAX);
-        let AuditRun { log: log_owner, det, cols, labels, any_label, mut warnings, bad_rows, mut faults, mut open, gaps, gps_reports, gps_fixes, flagged_epochs, .. } = self;
-        let log = log_owner.borrow();
-        if let Some(iv) = open.take() {
-            faults.push(iv);
-        }
-        if bad_rows > 5 {
-            warnings.push(format!("{bad_rows} bad rows skipped in all"));
-        }
-        let st = det.stats();
-        if st.gps_epochs == 0 && !warnings.iter().any(|w| w.contains("GPS unavailable")) {
-            warnings.push(if log.missing.iter().any(|m| m == "gps") {
-                "GPS unavailable: the log has no GPS data; no residual-based verdicts were made".into()
-            } else {
-                "GPS unavailable: no valid fix in the whole log; no residual-based verdicts were made".into()
-            });
-        }
-        for g in &gaps {
-            warnings.push(format!("data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)", g.start, g.end));
-        }
-        let duration = match (cols.t.first(), cols.t.last()) {
-            (Some(a), Some(b)) => b - a,
-            _ => 0.0,
-        };
-        let active = (duration - gaps.iter().map(|g| g.end - g.start).sum::<f64>()).max(1e-9);
-        let metrics = any_label.then(|| metrics::compute(&cols.t, &labels, &cols.status));
-        faults.truncate(MAX_LISTED);
-        let report = Report {
-            format: log.format,
-            rows: cols.t.len(),
-            duration_s: duration,
-            gps_epochs: st.gps_epochs,
-            gps_rate_hz: st.gps_epochs as f64 / active,
-            imu_rate_hz: st.imu_rows as f64 / active,
-            gps_available: st.gps_epochs > 0,
-            gps_fix_fraction: if gps_reports > 0 { gps_fixes as f64 / gps_reports as f64 } else { 0.0 },
-            flagged_gps_epoch_fraction: if st.gps_epochs > 0 { flagged_epochs as f64 / st.gps_epochs as f64 } else { 0.0 },
-            faults,
-            data_gaps: gaps,
-            missing: log.missing.clone(),
-            warnings,
-            meta: log.meta.clone(),
-            metrics,
-            stats: st,
-        };
-        (report, cols)
+        let log = self.log.borrow();
+        let report = self.tally.report(log.format, log.missing.clone(), log.meta.clone());
+        (report, self.cols)
     }
 }
 
 /// Run the detector over a whole log.
 pub fn audit(log: &LogData, cfg: &Config) -> Result<(Report, Columns), String> {
     Ok(AuditRun::new(log, cfg)?.finish())
+}
+
+/// A navlog CSV audited as it streams in, chunk by chunk, in bounded memory
+/// (a 1 GB file never sits in memory whole): the CSV reader is incremental,
+/// and per-row outputs are kept only for the latest chunk ([`StreamAudit::outputs`],
+/// e.g. for a per-sample file written alongside). The report equals
+/// [`audit`]'s on the same bytes.
+pub struct StreamAudit {
+    reader: CsvReader,
+    tally: Tally,
+    /// Rows parsed from the current chunk (reused).
+    rows: Vec<Sample>,
+    out: Columns,
+    keep_outputs: bool,
+    bytes: u64,
+}
+
+impl StreamAudit {
+    /// `keep_outputs`: collect each chunk's per-row outputs.
+    pub fn new(cfg: &Config, keep_outputs: bool) -> Result<Self, String> {
+        Ok(StreamAudit { reader: CsvReader::new(), tally: Tally::new(cfg, vec![])?, rows: Vec::new(), out: Columns::default(), keep_outputs, bytes: 0 })
+    }
+
+    /// Feed the next chunk of the file (any size, any split). Returns the
+    /// rows completed by it. A malformed line is an error naming it, as in
+    /// [`crate::logs::csv::read_csv`].
+    pub fn feed(&mut self, chunk: &[u8]) -> Result<usize, String> {
+        self.bytes += chunk.len() as u64;
+        self.rows.clear();
+        self.reader.feed(chunk, &mut self.rows)?;
+        Ok(self.drain())
+    }
+
+    fn drain(&mut self) -> usize {
+        self.out.clear();
+        let base = self.tally.rows as u64 + self.tally.bad_rows;
+        for (k, s) in self.rows.iter().enumerate() {
+            if let Some(o) = self.tally.push(s, base + k as u64) {
+                if self.keep_outputs {
+                    self.out.push(&o, &self.tally.det.residuals());
+                }
+            }
+        }
+        self.rows.len()
+    }
+
+    /// Per-row outputs of the latest chunk (empty unless `keep_outputs`).
+    pub fn outputs(&self) -> &Columns {
+        &self.out
+    }
+
+    /// Bytes fed so far.
+    pub fn bytes(&self) -> u64 {
+        self.bytes
+    }
+
+    /// Rows audited so far (bad rows excluded).
+    pub fn rows(&self) -> usize {
+        self.tally.rows
+    }
+
+    /// End of input: the report, and the outputs of the last line if it had
+    /// no newline (when `keep_outputs`).
+    pub fn finish(mut self) -> Result<(Report, Columns), String> {
+        self.rows.clear();
+        self.reader.finish(&mut self.rows)?;
+        self.drain();
+        let missing = self.tally.missing();
+        let meta = self.reader.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
+        let mut warnings = core::mem::take(&mut self.reader.warnings);
+        warnings.append(&mut self.tally.warnings);
+        self.tally.warnings = warnings;
+        Ok((self.tally.report("csv", missing, meta), self.out))
+    }
 }
 
 fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Output, det: &Detector) {

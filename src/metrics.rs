@@ -37,51 +37,73 @@ fn ratio(a: u64, b: u64) -> f64 {
     }
 }
 
-/// Compute metrics from per-row time, label (NaN = unlabelled) and status.
-pub fn compute(t: &[f64], label: &[f64], status: &[u8]) -> Metrics {
-    let n = t.len().min(label.len()).min(status.len());
-    let mut m = Metrics::default();
-    let mut in_fault = false;
-    let mut start = 0.0;
-    let mut detected = false;
-    let mut delays = 0.0;
-    for i in 0..n {
-        let l = label[i];
-        if l.is_nan() {
-            continue;
+/// Metrics accumulated row by row (for streamed audits; [`compute`] uses it
+/// too, so both agree exactly).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Accumulator {
+    m: Metrics,
+    in_fault: bool,
+    start: f64,
+    detected: bool,
+    delays: f64,
+    /// Whether any labelled row was seen.
+    pub any_label: bool,
+}
+
+impl Accumulator {
+    /// One row: time (s), label (NaN = unlabelled), status.
+    pub fn push(&mut self, t: f64, label: f64, status: u8) {
+        if label.is_nan() {
+            return;
         }
-        let truth = l >= 0.5;
-        let flag = status[i] != 0;
+        self.any_label = true;
+        let m = &mut self.m;
+        let truth = label >= 0.5;
+        let flag = status != 0;
         match (truth, flag) {
             (true, true) => m.tp += 1,
             (true, false) => m.r#fn += 1,
             (false, true) => m.fp += 1,
             (false, false) => m.tn += 1,
         }
-        if truth && !in_fault {
-            in_fault = true;
-            start = t[i];
-            detected = false;
+        if truth && !self.in_fault {
+            self.in_fault = true;
+            self.start = t;
+            self.detected = false;
             m.fault_intervals += 1;
         } else if !truth {
-            in_fault = false;
+            self.in_fault = false;
         }
-        if truth && flag && !detected {
-            detected = true;
+        if truth && flag && !self.detected {
+            self.detected = true;
             m.detected_intervals += 1;
-            delays += t[i] - start;
+            self.delays += t - self.start;
         }
     }
-    let all = m.tp + m.fp + m.tn + m.r#fn;
-    m.accuracy = ratio(m.tp + m.tn, all);
-    m.false_alarm_rate = ratio(m.fp, m.tp + m.fp);
-    m.misdetection_rate = ratio(m.r#fn, m.tp + m.r#fn);
-    m.precision = ratio(m.tp, m.tp + m.fp);
-    m.recall = ratio(m.tp, m.tp + m.r#fn);
-    let (p, r) = (m.precision, m.recall);
-    m.f2 = if p + r > 0.0 { 5.0 * p * r / (4.0 * p + r) } else { 0.0 };
-    m.mean_detection_delay = if m.detected_intervals > 0 { delays / m.detected_intervals as f64 } else { f64::NAN };
-    m
+
+    /// The rates from the counts so far.
+    pub fn metrics(&self) -> Metrics {
+        let mut m = self.m;
+        let all = m.tp + m.fp + m.tn + m.r#fn;
+        m.accuracy = ratio(m.tp + m.tn, all);
+        m.false_alarm_rate = ratio(m.fp, m.tp + m.fp);
+        m.misdetection_rate = ratio(m.r#fn, m.tp + m.r#fn);
+        m.precision = ratio(m.tp, m.tp + m.fp);
+        m.recall = ratio(m.tp, m.tp + m.r#fn);
+        let (p, r) = (m.precision, m.recall);
+        m.f2 = if p + r > 0.0 { 5.0 * p * r / (4.0 * p + r) } else { 0.0 };
+        m.mean_detection_delay = if m.detected_intervals > 0 { self.delays / m.detected_intervals as f64 } else { f64::NAN };
+        m
+    }
+}
+
+/// Compute metrics from per-row time, label (NaN = unlabelled) and status.
+pub fn compute(t: &[f64], label: &[f64], status: &[u8]) -> Metrics {
+    let mut acc = Accumulator::default();
+    for ((t, l), s) in t.iter().zip(label).zip(status) {
+        acc.push(*t, *l, *s);
+    }
+    acc.metrics()
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]

@@ -338,9 +338,12 @@ pub fn snapshot_info(snapshot: &[u8]) -> Result<JsValue, JsError> {
     serde_wasm_bindgen::to_value(&crate::snapshot::info(snapshot).map_err(err)?).map_err(err)
 }
 
-fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue, JsError> {
+fn report_object(report: &audit::Report) -> Result<JsValue, JsError> {
     let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
-    let rep = serde::Serialize::serialize(report, &ser).map_err(err)?;
+    serde::Serialize::serialize(report, &ser).map_err(err)
+}
+
+fn columns_object(cols: &audit::Columns) -> JsValue {
     let c = Object::new();
     set(&c, "t", &Float64Array::from(&cols.t[..]).into());
     set(&c, "status", &Uint8Array::from(&cols.status[..]).into());
@@ -351,9 +354,13 @@ fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue
     for (name, v) in audit::RESID_NAMES.iter().zip(cols.resid.iter()) {
         set(&c, name, &Float64Array::from(&v[..]).into());
     }
+    c.into()
+}
+
+fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue, JsError> {
     let out = Object::new();
-    set(&out, "report", &rep);
-    set(&out, "columns", &c.into());
+    set(&out, "report", &report_object(report)?);
+    set(&out, "columns", &columns_object(cols));
     Ok(out.into())
 }
 
@@ -408,6 +415,58 @@ impl Auditor {
     pub fn finish(&mut self) -> Result<JsValue, JsError> {
         let run = self.run.take().ok_or_else(|| err("Auditor.finish: already finished"))?;
         let (report, cols) = run.finish();
+        audit_result(&report, &cols)
+    }
+}
+
+/// A navlog CSV audited as it streams in, in bounded memory (for files too
+/// large to hold whole): `feed(chunk)` any number of times, then `finish()`
+/// for the report (the same as `auditBytes` gives on the whole file). With
+/// `keepOutputs`, `outputs()` holds the per-row outputs of the latest chunk.
+#[wasm_bindgen]
+pub struct StreamAuditor {
+    run: Option<audit::StreamAudit>,
+}
+
+#[wasm_bindgen]
+impl StreamAuditor {
+    #[wasm_bindgen(constructor)]
+    pub fn new(
+        #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,
+        #[wasm_bindgen(js_name = keepOutputs)] keep_outputs: Option<bool>,
+    ) -> Result<StreamAuditor, JsError> {
+        let cfg = config_from(&config)?;
+        Ok(StreamAuditor { run: Some(audit::StreamAudit::new(&cfg, keep_outputs.unwrap_or(false)).map_err(err)?) })
+    }
+
+    /// Feed the next chunk (any split); returns the rows it completed.
+    pub fn feed(&mut self, chunk: &[u8]) -> Result<f64, JsError> {
+        let run = self.run.as_mut().ok_or_else(|| err("StreamAuditor.feed: already finished"))?;
+        Ok(run.feed(chunk).map_err(err)? as f64)
+    }
+
+    /// Per-row outputs `{ t, status, f, r, c, kind, rPn..rBaro }` of the latest chunk.
+    #[wasm_bindgen(unchecked_return_type = "AuditResult['columns']")]
+    pub fn outputs(&self) -> JsValue {
+        self.run.as_ref().map_or(JsValue::UNDEFINED, |r| columns_object(r.outputs()))
+    }
+
+    /// Rows audited so far.
+    pub fn rows(&self) -> f64 {
+        self.run.as_ref().map_or(0.0, |r| r.rows() as f64)
+    }
+
+    /// Bytes fed so far.
+    pub fn bytes(&self) -> f64 {
+        self.run.as_ref().map_or(0.0, |r| r.bytes() as f64)
+    }
+
+    /// End of input: `{ report, columns }`, the columns holding the outputs
+    /// of a last unterminated line, if any.
+    #[wasm_bindgen(unchecked_return_type = "AuditResult")]
+    pub fn finish(&mut self) -> Result<JsValue, JsError> {
+        let run = self.run.take().ok_or_else(|| err("StreamAuditor.finish: already finished"))?;
+        let (report, cols) = run.finish().map_err(err)?;
         audit_result(&report, &cols)
     }
 }
