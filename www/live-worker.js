@@ -74,7 +74,8 @@ self.onmessage = async (ev) => {
       case 'rows':
         if (!det || state === 'ended') throw new Error('no live session to push rows into');
         for (const s of msg.rows) pushSample(s);
-        maybeTick(performance.now(), true);
+        if (performance.now() - lastSave >= SAVE_MS) sendSnapshot('auto');
+        else maybeTick(performance.now(), true);
         break;
       case 'speed':
         speed = Number(msg.speed) || 0;
