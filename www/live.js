@@ -227,7 +227,7 @@ async function onEnded(m) {
 }
 
 function record(m, reason) {
-  const { bytes, ...source } = L.source; // never the log itself
+  const source = { ...L.source };
   return {
     schema: 1,
     snapshot: m.snapshot,
@@ -430,7 +430,6 @@ function setPhase(p) {
   $('#live-pause').textContent = p === 'paused' ? 'Continue' : 'Pause';
   $('#live-stop').disabled = p === 'idle';
   $('#live-stop').textContent = p === 'ended' ? 'Close' : 'Stop';
-  if (p === 'idle' && !L.plot) $('#live-panel').hidden = true;
   if (p === 'idle') $('#live-panel').hidden = true;
 }
 

@@ -324,8 +324,8 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
   try {
     const t0 = Date.now();
     // "paper" seed 1: 12 500 rows at 50 Hz over 250 s, first retrain near row 2 000;
-    // at 20x a save (every 2 s of wall time) lands every ~2 000 rows
-    await startLiveScenario(page, 'paper', 1, 20);
+    // at 10x (25 s in all) a save (every 2 s of wall time) lands every ~1 000 rows
+    await startLiveScenario(page, 'paper', 1, 10);
     assert.equal(await page.$eval('#live-panel', (e) => e.hidden), false);
     await page.waitForFunction(() => {
       const h = window.__navguardLive;
@@ -353,9 +353,9 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
     assert.ok(saved, 'no saved live session after the reload');
     assert.equal(saved.schema, 1);
     assert.deepEqual({ kind: saved.source.kind, scenario: saved.source.scenario, seed: saved.source.seed, rows: saved.source.rows }, { kind: 'sim', scenario: 'paper', seed: 1, rows: 12500 });
-    assert.equal(saved.speed, 20);
+    assert.equal(saved.speed, 10);
     assert.equal(saved.snapshot.length, saved.info.bytes);
-    assert.ok(saved.nextRow >= before.lastSaved.nextRow && saved.nextRow <= before.nextRow + 2000, `saved at ${saved.nextRow}, before reload ${JSON.stringify(before.lastSaved)} / ${before.nextRow}`);
+    assert.ok(saved.nextRow >= before.lastSaved.nextRow && saved.nextRow <= before.nextRow + 4000, `saved at ${saved.nextRow}, before reload ${JSON.stringify(before.lastSaved)} / ${before.nextRow}`);
     assert.equal(saved.rowCount, saved.nextRow);
     assert.equal(saved.stats.rows, saved.nextRow);
     assert.ok(saved.stats.retrains >= 1, JSON.stringify(saved.stats));
