@@ -146,7 +146,7 @@ def dataflash_old():
     log = fmt(128, 89, "FMT", "BBnNZ", "Type,Length,Name,Format,Columns")
     log += fmt(130, 45, "GPS", "BIHBcLLeeEefI", "Status,TimeMS,Week,NSats,HDop,Lat,Lng,RelAlt,Alt,Spd,GCrs,VZ,T")
     log += fmt(131, 31, "IMU", "Iffffff", "TimeMS,GyrX,GyrY,GyrZ,AccX,AccY,AccZ")
-    log += fmt(132, 3 + 4 + 14, "ATT", "IccccCC", "TimeMS,DesRoll,Roll,DesPitch,Pitch,DesYaw,Yaw")
+    log += fmt(132, 3 + 4 + 12, "ATT", "IccccCC", "TimeMS,DesRoll,Roll,DesPitch,Pitch,DesYaw,Yaw")
     for k in range(30):
         t = 97_000 + k * 20
         log += H + bytes([131]) + struct.pack("<I6f", t, 0.0, 0.0, 0.0, 0.0, 0.0, -9.8)
