@@ -334,7 +334,8 @@ impl StreamAudit {
     pub fn feed(&mut self, chunk: &[u8]) -> Result<usize, String> {
         self.bytes += chunk.len() as u64;
         self.rows.clear();
-        self.reader.feed(chunk, &mut self.rows)?;
+        let r = self.reader.feed(chunk, &mut self.rows);
+        r.map_err(|e| self.not_csv(e))?;
         Ok(self.drain())
     }
 
@@ -349,6 +350,15 @@ impl StreamAudit {
             }
         }
         self.rows.len()
+    }
+
+    /// An error before the header says what the file is not, as [`read_any`](crate::logs::read_any) does.
+    fn not_csv(&self, e: String) -> String {
+        if self.reader.has_header() {
+            e
+        } else {
+            format!("not a ULog or DataFlash log, and not a navlog CSV: {e}")
+        }
     }
 
     /// Per-row outputs of the latest chunk (empty unless `keep_outputs`).
@@ -370,7 +380,8 @@ impl StreamAudit {
     /// no newline (when `keep_outputs`).
     pub fn finish(mut self) -> Result<(Report, Columns), String> {
         self.rows.clear();
-        self.reader.finish(&mut self.rows)?;
+        let r = self.reader.finish(&mut self.rows);
+        r.map_err(|e| self.not_csv(e))?;
         self.drain();
         let missing = self.tally.missing();
         let meta = self.reader.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();

@@ -4,14 +4,14 @@
 //   navguard simulate NAME [--seed N] [--out FILE.csv]
 //   navguard report [--seed N] [--json] [--quick]
 //   navguard train LABELLED.csv [...] --out MODEL.json
-import { readFileSync, writeFileSync, statSync, readdirSync } from 'node:fs';
+import { readFileSync, writeFileSync, statSync, readdirSync, openSync, readSync, writeSync, closeSync } from 'node:fs';
 import { Worker } from 'node:worker_threads';
 import { availableParallelism } from 'node:os';
 import { createRequire } from 'node:module';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
-import { perSampleCsv } from '../lib/csv.mjs';
+import { perSampleCsv, perSampleHeader, perSampleRows } from '../lib/csv.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
 
 const require = createRequire(import.meta.url);
@@ -51,27 +51,72 @@ function readConfig(path) {
   try { return JSON.parse(readFileSync(path, 'utf8')); } catch (e) { fail(`--config ${path}: ${e.message}`); }
 }
 
+const CHUNK = 4 << 20;
+
+/** True unless the file starts like a ULog or DataFlash log: navlog CSVs are
+ * streamed, the binary formats are read whole. */
+function looksLikeCsv(fd) {
+  const head = Buffer.alloc(8);
+  const n = readSync(fd, head, 0, 8, 0);
+  if (n >= 7 && head.subarray(0, 7).equals(Buffer.from([0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35]))) return false;
+  if (n >= 2 && head[0] === 0xa3 && head[1] === 0x95) return false;
+  return true;
+}
+
+/** A navlog CSV in 4 MiB chunks: memory stays bounded whatever the file's
+ * size; the per-sample file is written as the outputs come. */
+function auditCsvStream(file, fd, size, opt, config) {
+  const run = new ng.StreamAuditor(config, Boolean(opt['per-sample']));
+  let out = null;
+  try {
+    if (opt['per-sample']) {
+      out = openSync(opt['per-sample'], 'w');
+      writeSync(out, perSampleHeader());
+    }
+    const buf = Buffer.alloc(CHUNK);
+    for (let pos = 0; ; ) {
+      const n = readSync(fd, buf, 0, CHUNK, pos);
+      if (n === 0) break;
+      pos += n;
+      run.feed(buf.subarray(0, n));
+      if (out !== null) writeSync(out, perSampleRows(run.outputs()));
+      progress(`auditing ${file}: ${(100 * pos / Math.max(1, size)).toFixed(0)}% of ${(size / 1e6).toFixed(1)} MB, ${run.rows()} rows`);
+    }
+    const res = run.finish();
+    if (out !== null) writeSync(out, perSampleRows(res.columns));
+    return res;
+  } finally {
+    if (out !== null) closeSync(out);
+    run.free();
+  }
+}
+
 function audit(file, opt) {
-  let bytes;
-  try { bytes = readFileSync(file); } catch (e) { fail(`${file}: ${e.code === 'ENOENT' ? 'no such file' : e.message}`); }
+  let fd, size;
+  try { fd = openSync(file, 'r'); size = statSync(file).size; } catch (e) { fail(`${file}: ${e.code === 'ENOENT' ? 'no such file' : e.message}`); }
   const config = readConfig(opt.config);
-  progress(`auditing ${file} (${(bytes.length / 1e6).toFixed(1)} MB)...`);
+  progress(`auditing ${file} (${(size / 1e6).toFixed(1)} MB)...`);
   let res;
   try {
-    // In slices, so a long audit shows its progress on a terminal.
-    const run = new ng.Auditor(bytes, config);
-    const rows = run.rows();
-    const slice = Math.max(20000, Math.ceil(rows / 100));
-    for (let done = 0; done < 1; ) {
-      done = run.step(slice);
-      progress(`auditing ${file}: ${(100 * done).toFixed(0)}% of ${rows} rows`);
+    if (looksLikeCsv(fd)) {
+      res = auditCsvStream(file, fd, size, opt, config);
+    } else {
+      const bytes = readFileSync(fd);
+      // In slices, so a long audit shows its progress on a terminal.
+      const run = new ng.Auditor(bytes, config);
+      const rows = run.rows();
+      const slice = Math.max(20000, Math.ceil(rows / 100));
+      for (let done = 0; done < 1; ) {
+        done = run.step(slice);
+        progress(`auditing ${file}: ${(100 * done).toFixed(0)}% of ${rows} rows`);
+      }
+      res = run.finish();
+      run.free();
+      if (opt['per-sample']) writeFileSync(opt['per-sample'], perSampleCsv(res.columns));
     }
-    res = run.finish();
-    run.free();
-  } catch (e) { progressDone(); fail(`${file}: ${e.message}`); }
+  } catch (e) { progressDone(); fail(`${file}: ${e.message}`); } finally { closeSync(fd); }
   progressDone();
-  const { report, columns } = res;
-  if (opt['per-sample']) writeFileSync(opt['per-sample'], perSampleCsv(columns));
+  const { report } = res;
   const out = { file, ...report };
   if (opt.json) {
     process.stdout.write(JSON.stringify(out, (k, v) => (typeof v === 'number' && !Number.isFinite(v) ? null : v)) + '\n');
