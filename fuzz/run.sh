@@ -27,6 +27,8 @@ case "$t" in
     push) seeds=(fuzz/seeds/push) ;;
     *) echo "unknown target $t" >&2; exit 2 ;;
 esac
+dict=()
+[ -f "fuzz/dict/$t.dict" ] && dict=(-dict="fuzz/dict/$t.dict")
 exec nice -n 19 cargo fuzz run "$t" "$corpus" "${seeds[@]}" -- \
     -max_total_time="$secs" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
-    -print_final_stats=1 ${FUZZ_FLAGS:-}
+    -print_final_stats=1 "${dict[@]}" ${FUZZ_FLAGS:-}
