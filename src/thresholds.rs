@@ -56,18 +56,25 @@
 //!   only, but an F-score needs labelled faults and Y needs something that
 //!   can exceed σ_u (on the training data itself no window can, by
 //!   construction). We therefore add deterministic **probe faults** to a copy
-//!   of the training residuals: constant offsets of `probe_gain × RMS`
-//!   (default 3, i.e. a "3σ" fault) lasting `probe_len` samples (default 10),
-//!   one every `2w` samples starting at `w/2`. Probes are labelled; U and D
-//!   are computed on the probed copy for every reference point, while Φ_ν
-//!   itself always comes from the clean data. This is our choice, not the
-//!   paper's; see `docs/baek-jo.md`.
+//!   of the training residuals: constant offsets of `probe_gain × χ`
+//!   (default 2, so every probe sample exceeds every reference point of the
+//!   sweep and D measures the threshold, not the probe's size) lasting
+//!   `probe_len` samples (default 10), one every `2w` samples starting at
+//!   `w/2`. Probes are labelled; U and D are computed on the probed copy for
+//!   every reference point, while Φ_ν itself always comes from the clean
+//!   data. This is our choice, not the paper's; see `docs/baek-jo.md`.
 //! * Least-squares lines over the offset index `x = r`:
-//!   `U(x) = −u·x + a` (Eq. (4)) and `D(x) = p·x + c` (Eq. (5)).
+//!   `U(x) = −u·x + a` (Eq. (4)) and `D(x) = p·x + c` (Eq. (5)), fitted to
+//!   "the data set of m units": we take `m` = the reference points up to the
+//!   first one after U's peak where U ≤ `u_floor` (1 % of its maximum), see
+//!   [`regression_points`]. Beyond it the stage-2 verdict is certain (U ≈ 0)
+//!   and D is flat near 1; fitting the lines over that long flat tail (χ is
+//!   set by the rarest, largest soft fault) puts Eq. (9) beyond x_m at every
+//!   speed of our plant, i.e. ρ_ν = χ, a threshold that detects nothing.
 //! * Equilibrium (Eqs. (6)–(9)): with `D_t(x) = D(x_m − x)` (reflection
 //!   about the Y axis and translation by x_m), the stationarity condition of
 //!   the Lagrangian is `U(x) + D_t(x) = 0`, whose root is
-//!   `x* = (a + c + p·x_m)/(u + p)` (Eq. (9)), `x_m = R`. The paper assumes
+//!   `x* = (a + c + p·x_m)/(u + p)` (Eq. (9)), `x_m = m`. The paper assumes
 //!   `u > 0, p > 0`; we only require `u + p > 0` and clamp x* to `[1, x_m]`
 //!   (recorded in [`AdaptiveThreshold::clamped`]).
 //! * Conversion to the pair: `ρ_ν = ψ·x*` (x* is generally fractional, like
@@ -416,11 +423,14 @@ pub struct AdaptiveConfig {
     pub probe_len: usize,
     /// β of the F-score (paper: 2).
     pub beta: f64,
+    /// U level (of its maximum) below which the sweep is certain and the
+    /// regressions stop (our choice: 0.01), see [`regression_points`].
+    pub u_floor: f64,
 }
 
 impl Default for AdaptiveConfig {
     fn default() -> Self {
-        AdaptiveConfig { w: 100, psi: 0.02, probe_gain: 3.0, probe_len: 10, beta: 2.0 }
+        AdaptiveConfig { w: 100, psi: 0.02, probe_gain: 2.0, probe_len: 10, beta: 2.0, u_floor: 0.01 }
     }
 }
 
@@ -436,6 +446,9 @@ impl AdaptiveConfig {
         }
         if !(self.beta.is_finite() && self.beta > 0.0) {
             return Err(format!("beta = {}: must be finite and > 0", self.beta));
+        }
+        if !(self.u_floor.is_finite() && (0.0..1.0).contains(&self.u_floor)) {
+            return Err(format!("u_floor = {}: must be in [0, 1)", self.u_floor));
         }
         Ok(())
     }
@@ -456,6 +469,7 @@ pub struct AdaptiveThreshold {
     /// D(x) = p·x + c.
     pub p: f64,
     pub c: f64,
+    /// x_m: the number of reference points used by the regressions.
     pub x_m: f64,
     /// Equilibrium offset (after clamping to [1, x_m]).
     pub x_star: f64,
@@ -470,7 +484,8 @@ pub struct AdaptiveThreshold {
 /// Deterministic probe faults on a copy of the training residuals; returns
 /// (probed residuals, labels).
 fn probe(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<(Vec<f64>, Vec<bool>), String> {
-    let amp = cfg.probe_gain * rms(residuals);
+    let chi = residuals.iter().fold(0.0f64, |m, r| m.max(libm::fabs(*r)));
+    let amp = cfg.probe_gain * chi;
     let mut x = residuals.to_vec();
     let mut label = vec![false; x.len()];
     let mut start = cfg.w / 2;
@@ -521,6 +536,16 @@ pub fn two_stage_offline(residuals: &[f64], w: usize, rho: f64, sigma: f64) -> R
     Ok(out)
 }
 
+/// The number `m` of reference points the regressions use: up to and
+/// including the first point after the peak of U where U ≤ `u_floor`
+/// (at least 2, at most all).
+pub fn regression_points(unc: &[f64], u_floor: f64) -> usize {
+    let n = unc.len();
+    let peak = unc.iter().enumerate().fold(0, |b, (i, &v)| if v > unc[b] { i } else { b });
+    let end = (peak + 1..n).find(|&i| unc[i] <= u_floor).map_or(n, |i| i + 1);
+    end.max(2).min(n)
+}
+
 /// Fit AT (§3.3.2).
 pub fn fit_adaptive(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<AdaptiveThreshold, String> {
     cfg.check()?;
@@ -558,11 +583,12 @@ pub fn fit_adaptive(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<AdaptiveT
             *v /= umax;
         }
     }
-    let xs: Vec<f64> = (1..=model.x_m()).map(|r| r as f64).collect();
-    let (su, a) = linear_regression(&xs, &unc)?;
-    let (p, c) = linear_regression(&xs, &det)?;
+    let m = regression_points(&unc, cfg.u_floor);
+    let xs: Vec<f64> = (1..=m).map(|r| r as f64).collect();
+    let (su, a) = linear_regression(&xs, &unc[..m])?;
+    let (p, c) = linear_regression(&xs, &det[..m])?;
     let u = -su;
-    let x_m = model.x_m() as f64;
+    let x_m = m as f64;
     let raw = equilibrium(u, a, p, c, x_m)?;
     let x_star = raw.clamp(1.0, x_m);
     let rho = cfg.psi * x_star;
@@ -1056,8 +1082,26 @@ mod tests {
         assert!(two_stage_offline(&r, 100, kt.rho, kt.sigma).unwrap().iter().all(|o| !o.1));
         // Round trip through JSON.
         let pool = ThresholdPool::fit(Method::At, &[&r], &AdaptiveConfig::default()).unwrap();
+        // (serde_json's default float parsing may differ in the last bit.)
         let back: ThresholdPool = serde_json::from_str(&serde_json::to_string(&pool).unwrap()).unwrap();
-        assert_eq!(back, pool);
+        let (ModeThreshold::At(a), ModeThreshold::At(b)) = (&pool.modes[0], &back.modes[0]) else {
+            panic!("method changed in the round trip")
+        };
+        assert_relative_eq!(a.rho, b.rho, max_relative = 1e-14);
+        assert_eq!(a.sigma, b.sigma);
+        assert_eq!(a.model.sigma, b.model.sigma);
+        assert_eq!((back.method, back.w), (pool.method, pool.w));
+    }
+
+    #[test]
+    fn regression_points_stop_where_uncertainty_vanishes() {
+        // Peak at index 1, first value <= 0.01 after it at index 4 -> m = 5.
+        assert_eq!(regression_points(&[0.5, 1.0, 0.4, 0.2, 0.0, 0.3, 0.0], 0.01), 5);
+        // Never falls below the floor -> all points.
+        assert_eq!(regression_points(&[1.0, 0.5, 0.4], 0.01), 3);
+        // At least two points for a line.
+        assert_eq!(regression_points(&[1.0, 0.0, 0.0], 0.01), 2);
+        assert_eq!(regression_points(&[0.0, 0.0, 0.0], 0.01), 2);
     }
 }
 

@@ -21,12 +21,17 @@
 //! The Kalman filter runs the nominal discrete model; the residual is the
 //! innovation `r = y − H x̂⁻`. The "real" vehicle differs from the model by
 //! an unmodelled, slowly varying speed disturbance (Gauss–Markov, terrain and
-//! slip), encoder noise, and occasional short bursts of large readings (the
-//! soft faults of the paper's Figure 1). Their scale is calibrated per speed
-//! so that the residual RMS is close to the paper's Table 1 RT column (the
-//! only statistic of their residuals the paper gives); RT's Table 1 values
-//! therefore agree by construction and are not evidence.
-//!
+//! slip), Gaussian encoder noise, and rare single-sample glitches (the soft
+//! faults of the paper's Figure 1). The paper's Table 1 implies a peaked,
+//! heavy-tailed residual: at 1.0 m/s its RMS is 0.080 yet no window of 100
+//! holds more than 6 residuals above 0.1 (a Gaussian of that RMS would hold
+//! ~20). We therefore split the RMS of the paper's Table 1 RT column into a
+//! Gaussian core of 0.57·RMS and glitches (probability 0.003 per sample,
+//! magnitude uniform in [g, 3g] with g chosen to complete the RMS); the
+//! split was calibrated offline against the (ρ, σ) points of Table 1, which
+//! lie on Φ_ν. RT's Table 1 values therefore agree by construction, and KT's
+//! and AT's agree partly by construction; Table 2 was not used.
+
 //! # Fault injection (§4)
 //! Three occurrences per run at random, non-overlapping times (at least `w`
 //! samples apart and after the first `w`), each `δ ∈ {5, 10, 20, 50}`
@@ -399,9 +404,13 @@ pub struct NoiseModel {
 /// speed), which our noise is calibrated to.
 pub const PAPER_RMS: [(f64, f64); 4] = [(0.7, 0.078927), (1.0, 0.080349), (1.3, 0.092686), (1.6, 0.142931)];
 
-/// Encoder-noise std per unit of target residual RMS (calibrated once so
-/// the simulated training RMS lands near [`PAPER_RMS`]).
-const NOISE_PER_RMS: f64 = 0.82;
+/// Core (Gaussian) encoder noise per unit of target RMS; the rest of the
+/// RMS comes from rare glitches. Calibrated offline (see `docs/baek-jo.md`)
+/// so that the simulated training residuals approach the paper's Table 1:
+/// RMS and the KT/AT points (ρ, σ) that lie on Φ_ν.
+const CORE_PER_RMS: f64 = 0.57;
+/// Glitch start probability per sample.
+const GLITCH_PROB: f64 = 0.003;
 
 impl NoiseModel {
     /// Noise at `speed`, scaled to the paper's RMS (linear in between).
@@ -419,14 +428,17 @@ impl NoiseModel {
             let f = (speed - t[k - 1].0) / (t[k].0 - t[k - 1].0);
             t[k - 1].1 + f * (t[k].1 - t[k - 1].1)
         };
-        let e = NOISE_PER_RMS * target;
+        let e = CORE_PER_RMS * target;
+        // RMS² = e² + p·E[m²] (single-sample glitches), m = g·e,
+        // g ~ U(lo, 3lo): E[m²] = e²·lo²·13/3.
+        let lo = libm::sqrt((target * target - e * e) / (GLITCH_PROB * 13.0 / 3.0)) / e;
         Ok(NoiseModel {
             encoder_std: e,
-            disturbance_std: 0.35 * e,
+            disturbance_std: 0.1 * e,
             disturbance_tau: 1.0,
-            burst_prob: 0.01,
-            burst_gain: [2.5, 4.5],
-            burst_max_len: 3,
+            burst_prob: GLITCH_PROB,
+            burst_gain: [lo, 3.0 * lo],
+            burst_max_len: 1,
         })
     }
 }
@@ -621,6 +633,10 @@ pub struct Table1Row {
     pub at_p: f64,
     pub at_c: f64,
     pub at_clamped: bool,
+    /// Φ_ν upper boundaries σ_u(ρ_r), and U, D per reference point.
+    pub phi_sigma: Vec<u32>,
+    pub at_uncertainty: Vec<f64>,
+    pub at_detectability: Vec<f64>,
 }
 
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -760,6 +776,9 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Report, String> {
             at_p: at.p,
             at_c: at.c,
             at_clamped: at.clamped,
+            phi_sigma: at.model.sigma.clone(),
+            at_uncertainty: at.uncertainty.clone(),
+            at_detectability: at.detectability.clone(),
         });
     }
     let mut evs = [Evaluator::new(pools[0].clone())?, Evaluator::new(pools[1].clone())?, Evaluator::new(pools[2].clone())?];
