@@ -367,6 +367,9 @@ pub fn draw_occurrences(
     eta: f64,
     stats: &TrainStats,
 ) -> Result<Vec<Occurrence>, String> {
+    if stats.abs.is_empty() {
+        return Err("training statistics: no residual to pick mu_r from".into());
+    }
     let need = w + count * (len + w);
     if len == 0 || need > n {
         return Err(format!("test_len = {n}: too short for {count} faults of {len} samples {w} apart after {w}"));
@@ -413,6 +416,24 @@ const CORE_PER_RMS: f64 = 0.57;
 const GLITCH_PROB: f64 = 0.003;
 
 impl NoiseModel {
+    pub fn check(&self) -> Result<(), String> {
+        for (name, v) in [("encoder_std", self.encoder_std), ("disturbance_std", self.disturbance_std)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("{name} = {v}: must be finite and >= 0"));
+            }
+        }
+        if !(self.disturbance_tau.is_finite() && self.disturbance_tau > 0.0) {
+            return Err(format!("disturbance_tau = {}: must be finite and > 0", self.disturbance_tau));
+        }
+        if !(0.0..=1.0).contains(&self.burst_prob) {
+            return Err(format!("burst_prob = {}: must be in [0, 1]", self.burst_prob));
+        }
+        if !self.burst_gain.iter().all(|g| g.is_finite()) || self.burst_max_len == 0 {
+            return Err(format!("burst_gain = {:?}, burst_max_len = {}: finite gains, length >= 1", self.burst_gain, self.burst_max_len));
+        }
+        Ok(())
+    }
+
     /// Noise at `speed`, scaled to the paper's RMS (linear in between).
     pub fn for_speed(speed: f64) -> Result<Self, String> {
         if !speed.is_finite() {
@@ -461,6 +482,7 @@ pub fn simulate(
     stats: Option<&TrainStats>,
     seed: u64,
 ) -> Result<Run, String> {
+    noise.check()?;
     let d = params.discretise()?;
     let va = params.voltage_for(speed)?;
     if !faults.is_empty() && stats.is_none() {
@@ -491,7 +513,7 @@ pub fn simulate(
         ];
         dist = a * dist + drive * rng.normal();
         if burst_left == 0 && rng.uniform() < noise.burst_prob {
-            burst_left = 1 + (rng.uniform() * noise.burst_max_len as f64) as usize % noise.burst_max_len.max(1);
+            burst_left = 1 + (rng.uniform() * noise.burst_max_len as f64) as usize % noise.burst_max_len;
             let g = noise.burst_gain[0] + (noise.burst_gain[1] - noise.burst_gain[0]) * rng.uniform();
             burst = if rng.uniform() < 0.5 { -g } else { g } * noise.encoder_std;
         }
@@ -672,8 +694,13 @@ pub struct Report {
     pub ordering: Ordering,
 }
 
+/// One row of the paper's Table 1: (speed, AT (ρ, σ), KT (ρ, σ), RT mean RMS).
+pub type PaperTable1Row = (f64, (f64, f64), (f64, f64), f64);
+/// One speed of the paper's Table 2: (speed, [type][method] (FNR, FPR)).
+pub type PaperTable2Row = (f64, [[(f64, f64); 3]; 3]);
+
 /// Baek & Jo's Table 1: (speed, AT (ρ, σ), KT (ρ, σ), RT mean RMS).
-pub const PAPER_TABLE1: [(f64, (f64, f64), (f64, f64), f64); 4] = [
+pub const PAPER_TABLE1: [PaperTable1Row; 4] = [
     (0.7, (0.117679, 5.0), (0.1, 8.0), 0.078927),
     (1.0, (0.1249, 1.8), (0.1, 6.0), 0.080349),
     (1.3, (0.167154, 2.3), (0.1, 13.0), 0.092686),
@@ -682,7 +709,7 @@ pub const PAPER_TABLE1: [(f64, (f64, f64), (f64, f64), f64); 4] = [
 
 /// Baek & Jo's Table 2: per speed, per fault type (constant, random, noise),
 /// (FNR, FPR) of AT, KT, RT.
-pub const PAPER_TABLE2: [(f64, [[(f64, f64); 3]; 3]); 4] = [
+pub const PAPER_TABLE2: [PaperTable2Row; 4] = [
     (0.7, [[(0.401, 0.0), (0.456, 0.0), (0.664, 0.636)], [(0.210, 0.0), (0.245, 0.0), (0.515, 0.640)], [(0.000, 0.0), (0.114, 0.0), (0.195, 0.646)]]),
     (1.0, [[(0.078, 0.0), (0.422, 0.0), (0.861, 0.690)], [(0.121, 0.0), (0.278, 0.0), (0.515, 0.648)], [(0.0, 0.001), (0.001, 0.0), (0.240, 0.644)]]),
     (1.3, [[(0.260, 0.0), (0.438, 0.278), (0.785, 0.650)], [(0.195, 0.001), (0.416, 0.278), (0.515, 0.649)], [(0.001, 0.0), (0.306, 0.245), (0.276, 0.647)]]),
