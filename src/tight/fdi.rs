@@ -198,7 +198,7 @@ pub struct FilterPredictor {
 
 impl FilterPredictor {
     pub fn new(base_variance: f64) -> Self {
-        FilterPredictor { smoothing: 0.2, base_variance, sigma_rate: 0.05, max_age: 120.0, history: BTreeMap::new() }
+        FilterPredictor { smoothing: 0.2, base_variance, sigma_rate: 0.5, max_age: 120.0, history: BTreeMap::new() }
     }
 }
 
@@ -306,80 +306,130 @@ impl FdsrConfig {
     }
 }
 
-/// One GNSS epoch of detection and reconfiguration followed by the filter
-/// update. `t1` is [`threshold_t1`] of `cfg.alpha`.
-pub fn process_epoch(
-    ekf: &mut TcEkf,
-    meas: &[PrMeas],
-    cfg: &FdsrConfig,
-    t1: f64,
-    predictor: &mut dyn RangePredictor,
-    t: f64,
-) -> EpochDecision {
-    let lin = ekf.linearize(meas);
-    let mut out = EpochDecision {
-        lambdas: Vec::new(),
-        lambda_max: 0.0,
-        detection: None,
-        rdpop: None,
-        action: Action::NoMeasurements,
-    };
-    if lin.is_empty() {
-        return out;
+/// Detection and reconfiguration state across epochs: the λ test, the
+/// predictor and, for [`Strategy::Switch`], the satellites under repair.
+///
+/// FDI and FDA test every epoch afresh (Appendix A), as in the paper; their
+/// weakness is that while a satellite is left out the filter's prediction
+/// drifts along its line of sight, λ shrinks below T1 and the fault leaks in
+/// (the decreasing detection function of the paper's Figure 10).
+/// The switch keeps a flagged satellite under repair while its pseudo-range
+/// disagrees with the predictor, `|ρ − ρ̂| / √(R + σ̂²) > T1`: a stand-in for
+/// the GAN generation score, checked against the same threshold.
+pub struct Reconfigurator {
+    pub cfg: FdsrConfig,
+    /// Detection threshold T1.
+    pub t1: f64,
+    pub predictor: Box<dyn RangePredictor>,
+    /// Satellites under repair (switch only): prn -> time first flagged, s.
+    pub under_repair: BTreeMap<u8, f64>,
+}
+
+impl Reconfigurator {
+    pub fn new(cfg: FdsrConfig, predictor: Box<dyn RangePredictor>) -> Result<Self, TightError> {
+        let t1 = cfg.check()?;
+        Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new() })
     }
-    let pv = ekf.innovation_cov(&lin);
-    let Some(lam) = w_test(&pv, &lin.v) else {
-        out.action = Action::Rejected;
-        return out;
-    };
-    out.lambdas = lin.prns.iter().zip(lam.iter()).map(|(&p, &l)| (p, l)).collect();
-    out.lambda_max = lam.iter().fold(0.0f64, |m, l| m.max(l.abs()));
-    let det = if cfg.strategy == Strategy::None { None } else { detect(&lam, &lin.prns, t1) };
-    out.detection = det;
-    let flagged = det.map(|d| d.index);
-    // Healthy satellites feed the predictor's history.
-    for i in 0..lin.len() {
-        if Some(i) != flagged {
-            predictor.observe(t, lin.prns[i], lin.predicted[i] + lin.v[i], lin.predicted[i]);
+
+    /// One GNSS epoch at time `t` (s): test, reconfigure, update the filter.
+    pub fn epoch(&mut self, ekf: &mut TcEkf, meas: &[PrMeas], t: f64) -> EpochDecision {
+        let cfg = self.cfg;
+        let lin = ekf.linearize(meas);
+        let mut out = EpochDecision {
+            lambdas: Vec::new(),
+            lambda_max: 0.0,
+            detection: None,
+            rdpop: None,
+            action: Action::NoMeasurements,
+        };
+        if lin.is_empty() {
+            return out;
         }
-    }
-    let (used, action) = match det {
-        None => (Some(lin.clone()), Action::UpdateAll),
-        Some(d) => {
-            out.rdpop = rdpop(&ekf.p, &lin, d.index);
-            match cfg.strategy {
-                Strategy::None => (Some(lin.clone()), Action::UpdateAll),
-                Strategy::Fdi => (Some(lin.without(d.index)), Action::Isolate),
-                Strategy::Fda => match adapt(&lin, &pv, d.index) {
-                    Some((a, _, _)) => (Some(a), Action::Adapt),
-                    None => (Some(lin.without(d.index)), Action::Isolate),
-                },
-                Strategy::Switch => {
-                    let rec = if out.rdpop.is_some_and(|r| r > cfg.eta) {
-                        predictor.reconstruct(t, d.prn, lin.predicted[d.index])
-                    } else {
-                        None
-                    };
-                    match rec {
-                        Some(r) => {
-                            let mut l = lin.clone();
-                            l.v[d.index] = r.pr - lin.predicted[d.index];
-                            l.r[(d.index, d.index)] = r.variance;
-                            (Some(l), Action::Reconstruct)
+        let pv = ekf.innovation_cov(&lin);
+        let Some(lam) = w_test(&pv, &lin.v) else {
+            out.action = Action::Rejected;
+            return out;
+        };
+        out.lambdas = lin.prns.iter().zip(lam.iter()).map(|(&p, &l)| (p, l)).collect();
+        out.lambda_max = lam.iter().fold(0.0f64, |m, l| m.max(l.abs()));
+
+        // Satellites under repair stay flagged while they disagree with the
+        // predictor; the first one still inconsistent is the detection.
+        let mut det = None;
+        if cfg.strategy == Strategy::Switch {
+            let mut release = Vec::new();
+            for (&prn, _) in self.under_repair.iter() {
+                let Some(i) = lin.index_of(prn) else {
+                    release.push(prn);
+                    continue;
+                };
+                let pr = lin.predicted[i] + lin.v[i];
+                match self.predictor.reconstruct(t, prn, lin.predicted[i]) {
+                    Some(r) => {
+                        let stat = (pr - r.pr) / libm::sqrt(lin.r[(i, i)] + r.variance);
+                        if stat.abs() > self.t1 && det.is_none() {
+                            det = Some(Detection { index: i, prn, lambda: stat });
+                        } else if stat.abs() <= self.t1 {
+                            release.push(prn);
                         }
-                        None => (Some(lin.without(d.index)), Action::Isolate),
+                    }
+                    None => release.push(prn),
+                }
+            }
+            for p in release {
+                self.under_repair.remove(&p);
+            }
+        }
+        if det.is_none() && cfg.strategy != Strategy::None {
+            det = detect(&lam, &lin.prns, self.t1);
+            if let (Some(d), Strategy::Switch) = (det, cfg.strategy) {
+                self.under_repair.entry(d.prn).or_insert(t);
+            }
+        }
+        out.detection = det;
+        let flagged = det.map(|d| d.index);
+        // Healthy satellites feed the predictor's history.
+        for i in 0..lin.len() {
+            if Some(i) != flagged && !self.under_repair.contains_key(&lin.prns[i]) {
+                self.predictor.observe(t, lin.prns[i], lin.predicted[i] + lin.v[i], lin.predicted[i]);
+            }
+        }
+        let (used, action) = match det {
+            None => (lin.clone(), Action::UpdateAll),
+            Some(d) => {
+                out.rdpop = rdpop(&ekf.p, &lin, d.index);
+                match cfg.strategy {
+                    Strategy::None => (lin.clone(), Action::UpdateAll),
+                    Strategy::Fdi => (lin.without(d.index), Action::Isolate),
+                    Strategy::Fda => match adapt(&lin, &pv, d.index) {
+                        Some((a, _, _)) => (a, Action::Adapt),
+                        None => (lin.without(d.index), Action::Isolate),
+                    },
+                    Strategy::Switch => {
+                        let rec = if out.rdpop.is_some_and(|r| r > cfg.eta) {
+                            self.predictor.reconstruct(t, d.prn, lin.predicted[d.index])
+                        } else {
+                            None
+                        };
+                        match rec {
+                            Some(r) => {
+                                let mut l = lin.clone();
+                                l.v[d.index] = r.pr - lin.predicted[d.index];
+                                l.r[(d.index, d.index)] = r.variance;
+                                (l, Action::Reconstruct)
+                            }
+                            None => (lin.without(d.index), Action::Isolate),
+                        }
                     }
                 }
             }
-        }
-    };
-    out.action = action;
-    if let Some(u) = used {
-        if !u.is_empty() && ekf.update(&u).is_none() {
+        };
+        out.action = action;
+        if !used.is_empty() && ekf.update(&used).is_none() {
             out.action = Action::Rejected;
         }
+        out
     }
-    out
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]
@@ -521,7 +571,8 @@ mod tests {
         // First offset is taken as is: ρ̂ = predicted + 3.
         let r = fp.reconstruct(10.0, 5, 250.0).unwrap();
         assert_relative_eq!(r.pr, 253.0);
-        assert_relative_eq!(r.variance, 9.0 + 0.25, epsilon = 1e-12);
+        // σ grows 0.5 m/s with age: 9 + (0.5·10)².
+        assert_relative_eq!(r.variance, 9.0 + 25.0, epsilon = 1e-12);
         // Exponential smoothing with weight 0.2: 0.8·3 + 0.2·(−2) = 2.
         fp.observe(1.0, 5, 98.0, 100.0);
         assert_relative_eq!(fp.reconstruct(1.0, 5, 0.0).unwrap().pr, 2.0, epsilon = 1e-12);

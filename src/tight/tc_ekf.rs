@@ -105,11 +105,12 @@ pub struct ImuNoise {
 }
 
 impl Default for ImuNoise {
-    /// A UAV-grade MEMS IMU: 0.3°/√h, 0.1 m/s/√h.
+    /// A small-UAV MEMS IMU including airframe vibration, which dominates
+    /// the datasheet noise: 0.2°/√s (12°/√h) and 0.05 m/s/√s (3 m/s/√h).
     fn default() -> Self {
         ImuNoise {
-            gyro_arw: 0.3f64.to_radians() / 60.0,
-            accel_vrw: 0.1 / 60.0,
+            gyro_arw: 0.2f64.to_radians(),
+            accel_vrw: 0.05,
             gyro_bias_rw: 1.0e-6,
             accel_bias_rw: 1.0e-4,
         }
