@@ -6,12 +6,14 @@ use serde::{Deserialize, Serialize};
 use crate::anfis::Anfis;
 use crate::filter::FilterNoise;
 use crate::indicators::IndicatorSettings;
+use crate::methods::Method;
 
 /// What users pass (JSON / JS object, camelCase). Unknown fields are rejected.
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename_all = "camelCase")]
 pub struct ConfigInput {
-    /// Detection method; only "anfis" for now.
+    /// Detection method (see [`crate::methods`]): "anfis" (default), "chi2",
+    /// "nis", "gate", "mahalanobis", "rms", "knee", "adaptive".
     pub method: Option<String>,
     /// Training condition: retrain after this many new fault epochs.
     pub tc: Option<f64>,
@@ -48,6 +50,7 @@ pub struct ConfigInput {
 /// Checked configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Config {
+    pub method: Method,
     pub tc: usize,
     pub q: usize,
     pub window: usize,
@@ -77,6 +80,7 @@ impl Default for Config {
         // Defaults cannot fail validation; a test checks that.
         let d = FilterNoise::default();
         Config {
+            method: Method::Anfis,
             tc: 100,
             q: 500,
             window: 10,
@@ -134,10 +138,12 @@ impl ConfigInput {
     /// Validate into a [`Config`].
     pub fn check(&self) -> Result<Config, String> {
         let d = Config::default();
-        if let Some(m) = &self.method {
-            if m != "anfis" {
-                return Err(format!("config.method: unknown method \"{m}\" (available: \"anfis\")"));
-            }
+        let method = match &self.method {
+            Some(m) => Method::parse(m)?,
+            None => d.method,
+        };
+        if matches!(method, Method::Rms | Method::Knee | Method::Adaptive) {
+            return Err(format!("config.method: \"{}\" is not wired into the streaming detector yet", method.name()));
         }
         let n = &d.noise;
         let outage_timeout = match self.outage_timeout {
@@ -148,6 +154,7 @@ impl ConfigInput {
             m.check().map_err(|e| format!("config.model: {e}"))?;
         }
         Ok(Config {
+            method,
             tc: int("tc", self.tc, 1, 1_000_000, d.tc)?,
             q: int("q", self.q, 10, 100_000, d.q)?,
             window: int("window", self.window, 2, 1000, d.window)?,
@@ -194,7 +201,7 @@ impl Config {
     pub fn to_input(&self) -> ConfigInput {
         let n = &self.noise;
         ConfigInput {
-            method: None,
+            method: Some(self.method.name().to_string()),
             tc: Some(self.tc as f64),
             q: Some(self.q as f64),
             window: Some(self.window as f64),

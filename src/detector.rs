@@ -44,6 +44,7 @@ use crate::config::Config;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Kf};
 use crate::frames::Anchor;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
+use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method};
 use crate::sample::Sample;
 
 /// A trained model: ANFIS parameters plus the initial databases D1₀, D2₀.
@@ -346,6 +347,13 @@ pub struct Detector {
     /// set a retrained ANFIS must not do worse on.
     d0_x: Vec<[f64; 2]>,
     d0_y: Vec<f64>,
+    /// Previous GPS epoch's innovations (pos, vel) for Δr; None after a
+    /// (re)initialisation.
+    prev_nu: Option<[f64; 6]>,
+    /// Reference windows of the `mahalanobis` method (position, velocity).
+    maha: [MahaWindow; 2],
+    /// Largest-γ baro innovation (ν, S) since the last GPS epoch.
+    baro_inn: Option<(f64, f64)>,
 }
 
 impl Detector {
@@ -396,6 +404,9 @@ impl Detector {
             train_y: Vec::with_capacity(2 * q),
             d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
             d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
+            prev_nu: None,
+            maha: Default::default(),
+            baro_inn: None,
             cfg,
         }
     }
@@ -417,6 +428,9 @@ impl Detector {
             return Err(format!("D0: {} samples but {} labels", self.d0_x.len(), self.d0_y.len()));
         }
         crate::config::check_anfis(&self.anfis).map_err(|e| format!("anfis: {e}"))?;
+        for w in &self.maha {
+            w.check_shape()?;
+        }
         self.train_x = Vec::with_capacity(2 * q);
         self.train_y = Vec::with_capacity(2 * q);
         Ok(())
@@ -610,6 +624,10 @@ impl Detector {
         }
         let inn = kf.baro_innovation(baro);
         self.resid[6] = inn.nu[0];
+        let g = |(nu, s): (f64, f64)| nu.abs() / s.max(1e-12).sqrt();
+        if self.baro_inn.is_none_or(|b| g((inn.nu[0], inn.s[0])) > g(b)) {
+            self.baro_inn = Some((inn.nu[0], inn.s[0]));
+        }
         let h_prior = -kf.x[2] + kf.x[9];
         let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
         let prev = self.ind.previous(6);
@@ -683,6 +701,7 @@ impl Detector {
             self.ind.reset_references();
             self.imu_gap = true;
             self.coast_start = None;
+            self.prev_nu = None;
             return Output { t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
         };
 
@@ -696,8 +715,10 @@ impl Detector {
             self.ind.observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
         }
         let vel_prior = kf.velocity();
+        let mut vin_opt = None;
         if let Some(v) = &vel {
             let vin = kf.velocity_innovation(v);
+            vin_opt = Some(vin);
             self.resid[3..6].copy_from_slice(&vin.nu);
             for a in 0..3 {
                 prev_r[3 + a] = self.ind.previous(3 + a);
@@ -732,8 +753,37 @@ impl Detector {
         let ind = self.ind.close_epoch();
         self.last_ind = ind;
         let x = inputs(ind.r, ind.c);
-        let f = self.anfis.eval(&x);
-        let mut fault = if self.oracle { s.label >= 0.5 } else { f >= self.cfg.threshold };
+        let f_anfis = self.anfis.eval(&x);
+        // Another method's decision on the same innovations (see `methods`).
+        let mut nu = [f64::NAN; 6];
+        nu[..3].copy_from_slice(&pin.nu);
+        let mut inn = EpochInnovations { nu, s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(), m: 3, baro: self.baro_inn.take() };
+        for a in 0..3 {
+            inn.s[(a, a)] = pin.s[a];
+        }
+        if let Some(vin) = &vin_opt {
+            inn.m = 6;
+            for a in 0..3 {
+                inn.nu[3 + a] = vin.nu[a];
+                inn.s[(3 + a, 3 + a)] = vin.s[a];
+            }
+        }
+        let dr: [[f64; 3]; 2] = core::array::from_fn(|g| {
+            core::array::from_fn(|a| self.prev_nu.map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a]))
+        });
+        self.prev_nu = Some(inn.nu);
+        let dec: Option<Decision> = match self.cfg.method {
+            Method::Anfis => None,
+            Method::Chi2 => Some(methods::chi2(&inn)),
+            Method::Nis => Some(methods::nis(&inn)),
+            Method::Gate => Some(methods::gate(&inn)),
+            Method::Mahalanobis => Some(methods::mahalanobis(&self.maha, dr, inn.m == 6)),
+            // Refused by the config check until the threshold pools are wired in.
+            Method::Rms | Method::Knee | Method::Adaptive => None,
+        };
+        let f = dec.map_or(f_anfis, |d| d.score);
+        let th = if dec.is_some() { 1.0 } else { self.cfg.threshold };
+        let mut fault = if self.oracle { s.label >= 0.5 } else { f >= th };
 
         // Gate: during a fault, withhold the sensors that departed. GPS
         // position and velocity come from one receiver and go together.
@@ -751,6 +801,12 @@ impl Detector {
             // coast drift, and so the departure's normalisation, small.
             for g in 0..GROUPS {
                 self.group_bad[g] |= bad(g);
+            }
+            // A group that failed the method's own test is withheld too.
+            if let Some(d) = &dec {
+                for g in 0..GROUPS {
+                    self.group_bad[g] |= d.failed[g];
+                }
             }
             if self.group_bad[1] && !self.group_bad[0] && ind.r_group[0] > 1.5 {
                 // Bad GPS velocity with a position residual off its clean
@@ -809,6 +865,7 @@ impl Detector {
             self.receiver_lost = false;
             self.ind.reset_references();
             self.prev_baro_h = None;
+            self.prev_nu = None;
         } else {
             if !self.group_bad[0] {
                 match kf.update_position(&y) {
@@ -844,17 +901,23 @@ impl Detector {
         // signature, a normal one with F ≤ 0.2. Borderline verdicts, where a
         // false alarm would sit, are not fed back, so retraining cannot
         // teach itself its own mistakes.
+        let anfis = dec.is_none();
         if fault {
-            if f >= CONFIDENT_FAULT && has_signature(ind.r, ind.c) {
+            if anfis && f >= CONFIDENT_FAULT && has_signature(ind.r, ind.c) {
                 self.d2.push(x);
                 self.new_faults += 1;
             }
-            if self.cfg.retrain && !self.oracle && self.new_faults >= self.cfg.tc {
+            if anfis && self.cfg.retrain && !self.oracle && self.new_faults >= self.cfg.tc {
                 self.retrain();
             }
         } else {
-            if f <= CONFIDENT_NORMAL {
+            if anfis && f <= CONFIDENT_NORMAL {
                 self.d1.push(x);
+            }
+            if self.cfg.method == Method::Mahalanobis {
+                for g in 0..2 {
+                    self.maha[g].push(dr[g]);
+                }
             }
             self.ind.accept_pv();
             self.ind.accept_imu();

@@ -6,12 +6,14 @@
 
 pub mod anfis;
 pub mod audit;
+pub mod compare;
 pub mod config;
 pub mod detector;
 pub mod filter;
 pub mod frames;
 pub mod indicators;
 pub mod logs;
+pub mod methods;
 pub mod metrics;
 pub mod sample;
 pub mod sim;

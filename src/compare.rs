@@ -1,0 +1,413 @@
+//! Head-to-head comparison of every `config.method` on the same flights: a
+//! battery of simulated flights (every fault kind at two magnitudes, the
+//! paper's outage scenario in both variants, clean aggressive and survey
+//! flights; each over several seeds) plus any real logs handed in.
+//!
+//! Per method: accuracy, false-alarm rate FP/(TP+FP), misdetection rate
+//! FN/(TP+FN) and F2 pooled over the labelled GPS epochs of the fault
+//! flights; false alarms per flight hour on the clean flights (an alarm is
+//! a run of flagged GPS epochs); per fault kind, how many injected faults
+//! were caught and the median detection delay. On real logs (no labels): the
+//! share of GPS epochs flagged.
+//!
+//! Runs incrementally ([`CompareRun::step`]) so a front end shows progress.
+
+use serde::Serialize;
+
+use crate::config::Config;
+use crate::detector::Detector;
+use crate::logs::LogData;
+use crate::methods::Method;
+use crate::metrics::{self, Metrics};
+use crate::sample::Sample;
+use crate::sim::{self, FaultKind, OutageMode, Scenario, Trajectory};
+
+/// One simulated flight of the battery.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// Group it is reported under: a fault kind name, "outage" or "clean".
+    pub group: String,
+    /// Readable label, e.g. "step 5 m".
+    pub label: String,
+    pub scenario: Scenario,
+}
+
+/// Fault magnitudes of the core issue: (kind, magnitudes, unit).
+const KINDS: [(FaultKind, [f64; 2], &str); 7] = [
+    (FaultKind::Step, [5.0, 20.0], "m"),
+    (FaultKind::Ramp, [0.1, 1.0], "m/s"),
+    (FaultKind::Noise, [3.0, 8.0], "m"),
+    (FaultKind::Frozen, [0.0, 0.0], ""),
+    (FaultKind::ZeroVelocity, [0.0, 0.0], ""),
+    (FaultKind::BaroStuck, [0.0, 0.0], ""),
+    (FaultKind::AccelBias, [0.3, 1.0], "m/s²"),
+];
+
+/// The battery for `seeds`.
+pub fn battery(seeds: &[u64]) -> Vec<Case> {
+    let mut out = vec![];
+    for &seed in seeds {
+        for (kind, mags, unit) in KINDS {
+            let mags: &[f64] = if mags[0] == mags[1] { &mags[..1] } else { &mags[..] };
+            for &m in mags {
+                // Ramps need time to grow; the rest get 30 s.
+                let len = if kind == FaultKind::Ramp { 60.0 } else { 30.0 };
+                let label = if unit.is_empty() { kind.name().to_string() } else { format!("{} {m} {unit}", kind.name()) };
+                out.push(Case { group: kind.name().into(), label, scenario: Scenario::with_fault(kind, m, 120.0, len, seed) });
+            }
+        }
+        out.push(Case { group: "outage".into(), label: "paper (degraded fix)".into(), scenario: Scenario::paper(OutageMode::Degraded, seed) });
+        out.push(Case { group: "outage".into(), label: "paper (silent)".into(), scenario: Scenario::paper(OutageMode::Silent, seed) });
+        out.push(Case { group: "clean".into(), label: "clean aggressive".into(), scenario: Scenario::clean(Trajectory::Aggressive, seed, 300.0) });
+        out.push(Case { group: "clean".into(), label: "clean survey".into(), scenario: Scenario::clean(Trajectory::Survey, seed, 300.0) });
+    }
+    out
+}
+
+/// Detection of one fault group by one method.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct KindResult {
+    pub group: String,
+    pub faults: u64,
+    pub detected: u64,
+    /// Median delay over the detected faults, s (NaN if none).
+    pub median_delay_s: f64,
+}
+
+/// A real log's flagged share for one method.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct LogResult {
+    pub name: String,
+    pub gps_epochs: u64,
+    pub flagged_fraction: f64,
+}
+
+/// Everything measured for one method.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct MethodResult {
+    pub method: &'static str,
+    /// Pooled over the fault flights' labelled epochs.
+    pub metrics: Metrics,
+    pub clean_hours: f64,
+    pub clean_alarms: u64,
+    pub false_alarms_per_hour: f64,
+    /// Share of clean flights' GPS epochs flagged.
+    pub clean_flagged_fraction: f64,
+    pub kinds: Vec<KindResult>,
+    pub logs: Vec<LogResult>,
+    /// Rows processed per second by this method (whole battery, this machine).
+    pub rows_per_s: f64,
+}
+
+/// The comparison.
+#[derive(Clone, Debug, Serialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Comparison {
+    pub seeds: Vec<u64>,
+    pub flights: usize,
+    pub methods: Vec<MethodResult>,
+}
+
+#[derive(Default)]
+struct Acc {
+    rows: Vec<(f64, f64, u8)>,
+    clean_s: f64,
+    clean_alarms: u64,
+    clean_epochs: u64,
+    clean_flagged: u64,
+    kinds: Vec<(String, u64, u64, Vec<f64>)>,
+    logs: Vec<LogResult>,
+    rows_done: u64,
+    seconds: f64,
+}
+
+/// A comparison in progress.
+pub struct CompareRun {
+    methods: Vec<Method>,
+    cases: Vec<Case>,
+    logs: Vec<(String, LogData)>,
+    seeds: Vec<u64>,
+    /// Samples of the current case (simulated once, run by every method).
+    current: Option<(usize, Vec<Sample>)>,
+    next: usize,
+    acc: Vec<Acc>,
+    /// Clock for rows/s, supplied by the caller (no std::time on wasm).
+    clock: fn() -> f64,
+}
+
+fn no_clock() -> f64 {
+    f64::NAN
+}
+
+impl CompareRun {
+    /// `methods` empty = all. `clock` returns seconds (e.g. `performance.now()/1e3`), or None.
+    pub fn new(seeds: &[u64], methods: &[Method], clock: Option<fn() -> f64>) -> Result<Self, String> {
+        if seeds.is_empty() {
+            return Err("compare: seeds must not be empty".into());
+        }
+        let methods = if methods.is_empty() { Method::ALL.to_vec() } else { methods.to_vec() };
+        let cases = battery(seeds);
+        Ok(CompareRun {
+            acc: methods.iter().map(|_| Acc::default()).collect(),
+            methods,
+            cases,
+            logs: vec![],
+            seeds: seeds.to_vec(),
+            current: None,
+            next: 0,
+            clock: clock.unwrap_or(no_clock),
+        })
+    }
+
+    /// Add a real log (run by every method, reported by name).
+    pub fn add_log(&mut self, name: &str, log: LogData) {
+        self.logs.push((name.to_string(), log));
+    }
+
+    fn units(&self) -> usize {
+        (self.cases.len() + self.logs.len()) * self.methods.len()
+    }
+
+    /// Fraction done, in [0, 1].
+    pub fn progress(&self) -> f64 {
+        let n = self.units();
+        if n == 0 { 1.0 } else { self.next as f64 / n as f64 }
+    }
+
+    pub fn done(&self) -> bool {
+        self.next >= self.units()
+    }
+
+    /// Run one (flight, method) pair. Returns the fraction done.
+    pub fn step(&mut self) -> Result<f64, String> {
+        if self.done() {
+            return Ok(1.0);
+        }
+        let nm = self.methods.len();
+        let (item, mi) = (self.next / nm, self.next % nm);
+        let method = self.methods[mi];
+        let cfg = Config { method, ..Config::default() };
+        if item < self.cases.len() {
+            if self.current.as_ref().is_none_or(|(i, _)| *i != item) {
+                let rows = sim::simulate(&self.cases[item].scenario)?;
+                self.current = Some((item, rows));
+            }
+            let rows = match &self.current {
+                Some((_, r)) => r,
+                None => return Err("compare: internal: no current flight".into()),
+            };
+            let t0 = (self.clock)();
+            let out = run(cfg, rows)?;
+            let dt = (self.clock)() - t0;
+            let acc = &mut self.acc[mi];
+            acc.rows_done += rows.len() as u64;
+            acc.seconds += dt;
+            let case = &self.cases[item];
+            if case.group == "clean" {
+                acc.clean_s += case.scenario.duration;
+                let mut prev = 0u8;
+                for (s, o) in rows.iter().zip(&out) {
+                    if !s.label.is_nan() {
+                        acc.clean_epochs += 1;
+                        acc.clean_flagged += *o as u64;
+                        acc.clean_alarms += (*o == 1 && prev == 0) as u64;
+                        prev = *o;
+                    }
+                }
+            } else {
+                let mut delay = f64::NAN;
+                let t: Vec<f64> = rows.iter().map(|s| s.t).collect();
+                let label: Vec<f64> = rows.iter().map(|s| s.label).collect();
+                let m = metrics::compute(&t, &label, &out);
+                for (s, o) in rows.iter().zip(&out) {
+                    if !s.label.is_nan() {
+                        acc.rows.push((s.t, s.label, *o));
+                    }
+                }
+                if m.detected_intervals > 0 {
+                    delay = m.mean_detection_delay;
+                }
+                let k = match acc.kinds.iter().position(|k| k.0 == case.group) {
+                    Some(k) => k,
+                    None => {
+                        acc.kinds.push((case.group.clone(), 0, 0, vec![]));
+                        acc.kinds.len() - 1
+                    }
+                };
+                let e = &mut acc.kinds[k];
+                e.1 += m.fault_intervals;
+                e.2 += m.detected_intervals;
+                if delay.is_finite() {
+                    e.3.push(delay);
+                }
+            }
+        } else {
+            let (name, log) = &self.logs[item - self.cases.len()];
+            let out = run(cfg, &log.samples)?;
+            let (mut epochs, mut flagged) = (0u64, 0u64);
+            let mut det_epochs = 0;
+            for (s, o) in log.samples.iter().zip(&out) {
+                if s.has_fix() {
+                    det_epochs += 1;
+                    epochs += 1;
+                    flagged += *o as u64;
+                }
+            }
+            let _ = det_epochs;
+            self.acc[mi].logs.push(LogResult {
+                name: name.clone(),
+                gps_epochs: epochs,
+                flagged_fraction: if epochs > 0 { flagged as f64 / epochs as f64 } else { 0.0 },
+            });
+        }
+        self.next += 1;
+        Ok(self.progress())
+    }
+
+    /// Run what is left and summarise.
+    pub fn finish(mut self) -> Result<Comparison, String> {
+        while !self.done() {
+            self.step()?;
+        }
+        let methods = self
+            .methods
+            .iter()
+            .zip(self.acc)
+            .map(|(m, a)| {
+                let mut acc = metrics::Accumulator::default();
+                for (t, l, s) in &a.rows {
+                    acc.push(*t, *l, *s);
+                }
+                let hours = a.clean_s / 3600.0;
+                MethodResult {
+                    method: m.name(),
+                    metrics: acc.metrics(),
+                    clean_hours: hours,
+                    clean_alarms: a.clean_alarms,
+                    false_alarms_per_hour: if hours > 0.0 { a.clean_alarms as f64 / hours } else { f64::NAN },
+                    clean_flagged_fraction: if a.clean_epochs > 0 { a.clean_flagged as f64 / a.clean_epochs as f64 } else { 0.0 },
+                    kinds: a
+                        .kinds
+                        .into_iter()
+                        .map(|(group, faults, detected, mut delays)| KindResult { group, faults, detected, median_delay_s: median(&mut delays) })
+                        .collect(),
+                    logs: a.logs,
+                    rows_per_s: a.rows_done as f64 / a.seconds,
+                }
+            })
+            .collect();
+        Ok(Comparison { seeds: self.seeds, flights: self.cases.len(), methods })
+    }
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+/// Statuses of one method over a stream (bad rows count as status 0).
+fn run(cfg: Config, rows: &[Sample]) -> Result<Vec<u8>, String> {
+    let mut det = Detector::new(cfg)?;
+    Ok(rows.iter().map(|s| det.push(s).map_or(0, |o| o.status)).collect())
+}
+
+fn f(x: f64, d: usize) -> String {
+    if x.is_finite() { format!("{x:.d$}") } else { "–".into() }
+}
+
+/// The comparison as Markdown tables (what the README shows).
+pub fn markdown(c: &Comparison) -> String {
+    let mut s = String::new();
+    s.push_str(&format!(
+        "{} simulated flights ({} seeds: {:?}); fault-flight rates pooled over labelled GPS epochs; false alarms per hour on the clean flights.\n\n",
+        c.flights,
+        c.seeds.len(),
+        c.seeds
+    ));
+    s.push_str("| method | accuracy | false alarm | misdetection | F2 | false alarms / h (clean) | clean epochs flagged |\n|---|---|---|---|---|---|---|\n");
+    let best = c.methods.iter().map(|m| m.metrics.f2).fold(f64::NEG_INFINITY, f64::max);
+    for m in &c.methods {
+        let name = if m.metrics.f2 == best { format!("**{}**", m.method) } else { m.method.to_string() };
+        s.push_str(&format!(
+            "| {name} | {} | {} | {} | {} | {} | {}% |\n",
+            f(m.metrics.accuracy, 4),
+            f(m.metrics.false_alarm_rate, 4),
+            f(m.metrics.misdetection_rate, 4),
+            f(m.metrics.f2, 4),
+            f(m.false_alarms_per_hour, 1),
+            f(100.0 * m.clean_flagged_fraction, 2)
+        ));
+    }
+    s.push_str("\nFaults caught (of injected) and median detection delay, s, per fault kind:\n\n| kind |");
+    for m in &c.methods {
+        s.push_str(&format!(" {} |", m.method));
+    }
+    s.push_str("\n|---|");
+    for _ in &c.methods {
+        s.push_str("---|");
+    }
+    s.push('\n');
+    if let Some(first) = c.methods.first() {
+        for (k, kr) in first.kinds.iter().enumerate() {
+            s.push_str(&format!("| {} |", kr.group));
+            for m in &c.methods {
+                match m.kinds.get(k) {
+                    Some(r) => s.push_str(&format!(" {}/{} · {} |", r.detected, r.faults, f(r.median_delay_s, 1))),
+                    None => s.push_str(" – |"),
+                }
+            }
+            s.push('\n');
+        }
+        if !first.logs.is_empty() {
+            s.push_str("\nReal logs (no labels): share of GPS epochs flagged:\n\n| log |");
+            for m in &c.methods {
+                s.push_str(&format!(" {} |", m.method));
+            }
+            s.push_str("\n|---|");
+            for _ in &c.methods {
+                s.push_str("---|");
+            }
+            s.push('\n');
+            for (k, lr) in first.logs.iter().enumerate() {
+                s.push_str(&format!("| {} ({} epochs) |", lr.name, lr.gps_epochs));
+                for m in &c.methods {
+                    match m.logs.get(k) {
+                        Some(r) => s.push_str(&format!(" {}% |", f(100.0 * r.flagged_fraction, 2))),
+                        None => s.push_str(" – |"),
+                    }
+                }
+                s.push('\n');
+            }
+        }
+    }
+    s
+}
+
+#[cfg(all(test, not(target_arch = "wasm32")))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn battery_covers_every_kind_outages_and_clean_flights() {
+        let b = battery(&[1, 2]);
+        // 7 kinds: 4 with two magnitudes, 3 without → 11, + 2 outage + 2 clean = 15 per seed.
+        assert_eq!(b.len(), 30);
+        for g in ["step", "ramp", "noise", "frozen", "zero-velocity", "baro-stuck", "accel-bias", "outage", "clean"] {
+            assert!(b.iter().any(|c| c.group == g), "{g}");
+        }
+    }
+
+    #[test]
+    fn median_even_and_odd() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!(median(&mut []).is_nan());
+    }
+}
