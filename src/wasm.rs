@@ -83,7 +83,7 @@ export interface NavSample {
 export type NavColumns = { t: Float64Array } & Partial<Record<Exclude<keyof NavSample, "t">, Float64Array>>;
 /** Detector configuration; every field optional, unknown fields throw. */
 export interface DetectorConfig {
-  method?: "anfis";
+  method?: "anfis" | "chi2" | "nis" | "gate" | "mahalanobis" | "rms" | "knee" | "adaptive";
   /** Training condition: retrain after this many new fault epochs (default 100). */
   tc?: number;
   /** Database length q (default 500). */
@@ -468,6 +468,77 @@ impl StreamAuditor {
         let run = self.run.take().ok_or_else(|| err("StreamAuditor.finish: already finished"))?;
         let (report, cols) = run.finish().map_err(err)?;
         audit_result(&report, &cols)
+    }
+}
+
+fn js_clock() -> f64 {
+    js_sys::Date::now() / 1000.0
+}
+
+/// Every `config.method` over a seeded battery of simulated flights (and any
+/// real logs added), in steps for a progress bar: `new CompareRun({ seeds,
+/// methods })`, `addLog(name, bytes)`, `step()` until it returns 1, then
+/// `finish()` → `{ comparison, markdown }`.
+#[wasm_bindgen]
+pub struct CompareRun {
+    run: Option<crate::compare::CompareRun>,
+}
+
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CompareOptions {
+    /// Number of seeds (1..=n), default 5.
+    seeds: Option<f64>,
+    methods: Option<Vec<String>>,
+}
+
+#[wasm_bindgen]
+impl CompareRun {
+    #[wasm_bindgen(constructor)]
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "{ seeds?: number; methods?: string[] } | undefined")] options: JsValue) -> Result<CompareRun, JsError> {
+        let o: CompareOptions = if options.is_undefined() || options.is_null() {
+            CompareOptions { seeds: None, methods: None }
+        } else {
+            serde_wasm_bindgen::from_value(options).map_err(|e| err(format!("compare options: {e}")))?
+        };
+        let n = o.seeds.unwrap_or(5.0);
+        if !(n.is_finite() && n.fract() == 0.0 && (1.0..=100.0).contains(&n)) {
+            return Err(err(format!("compare options.seeds: must be an integer in 1..=100, got {n}")));
+        }
+        let seeds: Vec<u64> = (1..=n as u64).collect();
+        let methods = o
+            .methods
+            .unwrap_or_default()
+            .iter()
+            .map(|m| crate::methods::Method::parse(m).map_err(|e| e.replace("config.method", "compare options.methods")))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(err)?;
+        Ok(CompareRun { run: Some(crate::compare::CompareRun::new(&seeds, &methods, Some(js_clock)).map_err(err)?) })
+    }
+
+    /// Add a real log (any supported format) under `name`.
+    #[wasm_bindgen(js_name = addLog)]
+    pub fn add_log(&mut self, name: &str, bytes: &[u8]) -> Result<(), JsError> {
+        let log = logs::read_any(bytes).map_err(|e| err(format!("{name}: {e}")))?;
+        self.run.as_mut().ok_or_else(|| err("CompareRun: already finished"))?.add_log(name, log);
+        Ok(())
+    }
+
+    /// Run one (flight, method) pair; returns the fraction done.
+    pub fn step(&mut self) -> Result<f64, JsError> {
+        self.run.as_mut().ok_or_else(|| err("CompareRun: already finished"))?.step().map_err(err)
+    }
+
+    /// `{ comparison, markdown }` (runs what is left first).
+    #[wasm_bindgen(unchecked_return_type = "{ comparison: object; markdown: string }")]
+    pub fn finish(&mut self) -> Result<JsValue, JsError> {
+        let run = self.run.take().ok_or_else(|| err("CompareRun: already finished"))?;
+        let c = run.finish().map_err(err)?;
+        let out = Object::new();
+        let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
+        set(&out, "comparison", &serde::Serialize::serialize(&c, &ser).map_err(err)?);
+        set(&out, "markdown", &crate::compare::markdown(&c).into());
+        Ok(out.into())
     }
 }
 
