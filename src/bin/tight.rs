@@ -3,7 +3,9 @@
 //! GAN: Table 3 environments (Figures 7–8), Table 4 fault types
 //! (Figures 11–12), FDI naming the faulty satellite.
 //!
-//! Usage: `navguard-tight [--out DIR] [--seed N]` (default `docs/figures`).
+//! Usage: `navguard-tight [--out DIR] [--seed N] [--runs N] [--eta X]`.
+//! Tables are means over `--runs` Monte Carlo runs (seeds `seed..seed+runs`);
+//! figures show the first run. Figures go to `--out` (default `docs/figures`).
 
 use std::fmt::Write as _;
 use std::process::ExitCode;
@@ -31,6 +33,7 @@ fn real_main() -> Result<(), String> {
     let mut out_dir = "docs/figures".to_string();
     let mut seed = 1u64;
     let mut eta = DEFAULT_ETA;
+    let mut n_runs = 5u64;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -38,6 +41,13 @@ fn real_main() -> Result<(), String> {
             "--seed" => {
                 let v = args.next().ok_or("--seed needs a number")?;
                 seed = v.parse().map_err(|_| format!("--seed: not an integer: {v:?}"))?;
+            }
+            "--runs" => {
+                let v = args.next().ok_or("--runs needs a number")?;
+                n_runs = v.parse().map_err(|_| format!("--runs: not an integer: {v:?}"))?;
+                if n_runs == 0 {
+                    return Err("--runs: must be >= 1, got 0".into());
+                }
             }
             "--eta" => {
                 let v = args.next().ok_or("--eta needs a number")?;
@@ -47,7 +57,7 @@ fn real_main() -> Result<(), String> {
                 }
             }
             "-h" | "--help" => {
-                println!("navguard-tight [--out DIR] [--seed N] [--eta X]");
+                println!("navguard-tight [--out DIR] [--seed N] [--runs N] [--eta X]");
                 return Ok(());
             }
             other => return Err(format!("unknown argument {other:?}")),
@@ -58,10 +68,11 @@ fn real_main() -> Result<(), String> {
     let envs = environments(&world, &cfg).map_err(|e| e.to_string())?;
     println!("# Tightly coupled GNSS/INS, Shen et al. 2022 without the GAN");
     println!(
-        "constellation: {} satellites, 6 planes; site {:?}; start t0 = {} s; seed {seed}; T1 = {:.3} (alpha 0.001), eta = {eta}",
+        "constellation: {} satellites, 6 planes; site {:?}; start t0 = {} s; seeds {seed}..{}; T1 = {:.3} (alpha 0.001), eta = {eta}",
         cfg.n_sats,
         cfg.site,
         world.t0,
+        seed + n_runs,
         navguard::tight::fdi::threshold_t1(0.001).map_err(|e| e.to_string())?
     );
     println!();
@@ -83,38 +94,54 @@ fn real_main() -> Result<(), String> {
         );
     }
 
-    // Table 3 runs: 20 m step on the faulty satellite.
-    let mut t3 = Vec::new();
-    for e in envs.iter().filter(|e| e.id <= 4) {
-        t3.push(run_case(&world, &cfg, e, FaultType::Step20, eta, seed, &e.name).map_err(|e| e.to_string())?);
-    }
-    println!();
-    println!("## Figure 7/8: 20 m step, positioning error during the fault section (m)");
-    print_cases(&t3);
-
-    // Table 4 runs in Env 5.
+    // Table 3 runs: 20 m step on the faulty satellite; Table 4 runs in Env 5.
     let e5 = envs.iter().find(|e| e.id == 5).ok_or("no Env 5")?;
-    let mut t4 = Vec::new();
+    let mut t3: Vec<Vec<CaseResult>> = Vec::new();
+    let mut t4: Vec<Vec<CaseResult>> = Vec::new();
+    for e in envs.iter().filter(|e| e.id <= 4) {
+        let mut v = Vec::new();
+        for sd in seed..seed + n_runs {
+            v.push(run_case(&world, &cfg, e, FaultType::Step20, eta, sd, &e.name).map_err(|e| e.to_string())?);
+        }
+        t3.push(v);
+    }
     for k in FaultType::ALL {
-        t4.push(run_case(&world, &cfg, e5, k, eta, seed, k.name()).map_err(|e| e.to_string())?);
+        let mut v = Vec::new();
+        for sd in seed..seed + n_runs {
+            v.push(run_case(&world, &cfg, e5, k, eta, sd, k.name()).map_err(|e| e.to_string())?);
+        }
+        t4.push(v);
     }
     println!();
-    println!("## Figure 11: fault types of Table 4 on G{} in {} (m)", e5.faulty_prn, e5.name);
+    println!("## Figures 7 and 8: 20 m step, positioning error during the fault section (m), mean of {n_runs} runs");
+    print_cases(&t3);
+    println!();
+    println!("## Figure 11: fault types of Table 4 on G{} in {} (m), mean of {n_runs} runs", e5.faulty_prn, e5.name);
     print_cases(&t4);
     println!();
-    println!("## Figure 12: mean positioning error relative to fault-free during 300-360 s (m)");
+    println!("## Figure 12: mean positioning error relative to fault-free during 300-360 s (m), mean of {n_runs} runs");
     println!("| fault | FDI | FDA | RDPOP-switch |");
     println!("|---|---|---|---|");
-    for c in &t4 {
-        let ff = c.record("FF").ok_or("no FF run")?;
-        let mut line = format!("| {} |", c.label);
+    let mut bars = Vec::new();
+    for (k, runs) in t4.iter().enumerate() {
+        let mut line = format!("| {} |", runs[0].label);
+        let mut v = Vec::new();
         for l in &LABELS[1..] {
-            let r = c.record(l).ok_or("missing run")?;
-            let d = rel_error(ff, r, c.fault.start, c.fault.end);
+            let mut acc = 0.0;
+            for c in runs {
+                let ff = c.record("FF").ok_or("no FF run")?;
+                let r = c.record(l).ok_or("missing run")?;
+                acc += rel_error(ff, r, c.fault.start, c.fault.end);
+            }
+            let d = acc / runs.len() as f64;
             let _ = write!(line, " {d:.2} |");
+            v.push(d);
         }
         println!("{line}");
+        bars.push((format!("Type {}", k + 1), v));
     }
+    let t3: Vec<CaseResult> = t3.into_iter().filter_map(|v| v.into_iter().next()).collect();
+    let t4: Vec<CaseResult> = t4.into_iter().filter_map(|v| v.into_iter().next()).collect();
 
     // Figures.
     std::fs::create_dir_all(&out_dir).map_err(|e| format!("{out_dir}: {e}"))?;
@@ -136,17 +163,7 @@ fn real_main() -> Result<(), String> {
         hline: Some(eta),
     }];
     write_svg(&out_dir, "tight_fig7_rdpop.svg", "Figure 7: RDPOP per environment", &fig7)?;
-    let mut bars = Vec::new();
-    for c in &t4 {
-        let ff = c.record("FF").ok_or("no FF run")?;
-        let mut v = Vec::new();
-        for l in &LABELS[1..] {
-            let r = c.record(l).ok_or("missing run")?;
-            v.push(rel_error(ff, r, c.fault.start, c.fault.end));
-        }
-        bars.push((format!("Type {}", bars.len() + 1), v));
-    }
-    write_bars(&out_dir, "tight_fig12_relative_error.svg", "Figure 12: mean positioning error relative to fault-free, 300-360 s (m)", &LABELS[1..], &bars)?;
+    write_bars(&out_dir, "tight_fig12_relative_error.svg", &format!("Figure 12: mean positioning error relative to fault-free, 300-360 s (m), {n_runs} runs"), &LABELS[1..], &bars)?;
     println!();
     println!("figures written to {out_dir}/tight_fig{{7,8,11,12}}_*.svg");
     Ok(())
@@ -304,24 +321,28 @@ fn rel_error(ff: &navguard::tight::scenario::RunRecord, r: &navguard::tight::sce
     r.mean_of(&d, a, b)
 }
 
-fn print_cases(cases: &[CaseResult]) {
-    println!("| case | faulty | RDPOP | FF rms/max | FDI rms/max | FDA rms/max | switch rms/max | FDI first flag (s after onset) | flag rate | wrong PRN flags |");
+fn print_cases(cases: &[Vec<CaseResult>]) {
+    println!("| case | faulty | RDPOP | FF rms/max | FDI (FI) rms/max | FDA (FA) rms/max | switch rms/max | FDI flags the faulty satellite at onset | FDI flag rate in section | flags naming another satellite |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    for c in cases {
-        let (a, b) = (c.fault.start, c.fault.end);
-        let mut line = format!("| {} | G{} |", c.label, c.fault.prn);
-        let ff = c.record("FF");
-        let rd = ff.map_or(f64::NAN, |r| r.mean_of(&r.rdpop_faulty, a, b));
+    for runs in cases {
+        let Some(c0) = runs.first() else { continue };
+        let n = runs.len() as f64;
+        let (a, b) = (c0.fault.start, c0.fault.end);
+        let mut line = format!("| {} | G{} |", c0.label, c0.fault.prn);
+        let rd = runs.iter().filter_map(|c| c.record("FF")).map(|r| r.mean_of(&r.rdpop_faulty, a, b)).sum::<f64>() / n;
         let _ = write!(line, " {rd:.3} |");
         for l in LABELS {
-            if let Some(r) = c.record(l) {
-                let _ = write!(line, " {:.2}/{:.2} |", r.rms(a, b), r.max(a, b));
-            }
+            let recs: Vec<_> = runs.iter().filter_map(|c| c.record(l)).collect();
+            let rms = recs.iter().map(|r| r.rms(a, b)).sum::<f64>() / n;
+            let max = recs.iter().map(|r| r.max(a, b)).sum::<f64>() / n;
+            let _ = write!(line, " {rms:.2}/{max:.2} |");
         }
-        if let Some(r) = c.record("FDI") {
-            let d = r.detection_delay(c.fault.prn, a, b).map_or("missed".to_string(), |d| format!("{d:.0}"));
-            let _ = write!(line, " {d} | {:.2} | {} |", r.flag_rate(c.fault.prn, a, b), r.wrong_flags(c.fault.prn, a, b));
-        }
+        let fdi: Vec<_> = runs.iter().filter_map(|c| c.record("FDI")).collect();
+        let at_once = fdi.iter().filter(|r| r.detection_delay(c0.fault.prn, a, b) == Some(0.0)).count();
+        let delays: Vec<String> = fdi.iter().map(|r| r.detection_delay(c0.fault.prn, a, b).map_or("-".to_string(), |d| format!("{d:.0}"))).collect();
+        let rate = fdi.iter().map(|r| r.flag_rate(c0.fault.prn, a, b)).sum::<f64>() / n;
+        let wrong: usize = fdi.iter().map(|r| r.wrong_flags(c0.fault.prn, a, b)).sum();
+        let _ = write!(line, " {at_once}/{} (delays s: {}) | {rate:.2} | {wrong} |", fdi.len(), delays.join(","));
         println!("{line}");
     }
 }

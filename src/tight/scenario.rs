@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::constellation::{dop, los_vectors, Constellation, Site};
 use super::fdi::{rdpop, Action, FdsrConfig, FilterPredictor, Reconfigurator, Strategy};
 use super::tc_ekf::{quat_exp, EkfConfig, ImuNoise, NavState, PrMeas, TcEkf, Vec17, GRAVITY, N};
+use super::stream::{EpochRow, InitialState, PrObs};
 use super::TightError;
 use crate::sim::Rng;
 
@@ -472,6 +473,26 @@ pub struct RunSpec<'a> {
 /// Noise draws do not depend on the strategy, so runs with the same seed
 /// share every noise realisation.
 pub fn run(spec: &RunSpec) -> Result<RunRecord, TightError> {
+    run_inner(spec, None)
+}
+
+/// [`run`] that also returns the simulated raw rows (one per IMU sample, in
+/// the [`EpochRow`] format of the streaming API) and the true initial state.
+pub fn run_with_rows(spec: &RunSpec) -> Result<(RunRecord, Vec<EpochRow>, InitialState), TightError> {
+    let mut rows = Vec::new();
+    let rec = run_inner(spec, Some(&mut rows))?;
+    let init = InitialState {
+        t: 0.0,
+        position_ned: [0.0, 0.0, -100.0],
+        velocity_ned: [15.0, 0.0, 0.0],
+        roll_pitch_yaw_deg: [0.0; 3],
+        clock_bias_m: 1500.0,
+        clock_drift_mps: 0.3,
+    };
+    Ok((rec, rows, init))
+}
+
+fn run_inner(spec: &RunSpec, mut rows: Option<&mut Vec<EpochRow>>) -> Result<RunRecord, TightError> {
     let cfg = spec.cfg;
     for (f, v) in [("imu_rate", cfg.imu_rate), ("gnss_rate", cfg.gnss_rate), ("duration", cfg.duration)] {
         if !(v.is_finite() && v > 0.0) {
@@ -546,6 +567,9 @@ pub fn run(spec: &RunSpec) -> Result<RunRecord, TightError> {
         truth.clk += l11 * z1;
         truth.drift += l21 * z1 + l22 * z2;
         ekf.propagate(&gyro, &acc, dt);
+        if let Some(r) = rows.as_deref_mut() {
+            r.push(EpochRow { t: (k + 1) as f64 * dt, gyro: [gyro[0], gyro[1], gyro[2]], accel: [acc[0], acc[1], acc[2]], pr: Vec::new() });
+        }
 
         if (k + 1) % steps_per_epoch != 0 {
             continue;
@@ -567,6 +591,9 @@ pub fn run(spec: &RunSpec) -> Result<RunRecord, TightError> {
             let fault = spec.fault.map_or(0.0, |fs| fs.bias(prn, te));
             let pr = (s - truth.p).norm() + truth.clk + tropo[i] * 2.4 / libm::sin(el) + mp[i] + white + fault;
             meas.push(PrMeas { prn, pr, sat: s });
+        }
+        if let Some(last) = rows.as_deref_mut().and_then(|r| r.last_mut()) {
+            last.pr = meas.iter().map(|m| PrObs { prn: m.prn, pr: m.pr }).collect();
         }
         let lin = ekf.linearize(&meas);
         let watch = lin.index_of(spec.watch_prn);
@@ -623,4 +650,81 @@ pub fn run_case(world: &World, cfg: &SimConfig, env: &Environment, kind: FaultTy
         runs.push((name.to_string(), run(&spec)?));
     }
     Ok(CaseResult { label: label.to_string(), env: env.clone(), fault, runs })
+}
+
+#[cfg(all(test, not(target_arch = "wasm32")))]
+mod tests {
+    use super::*;
+    use crate::tight::fdi::chi2_quantile;
+
+    #[test]
+    fn fault_types_table4() {
+        assert_eq!(FaultType::Step20.bias(0.0), 20.0);
+        assert_eq!(FaultType::Step10.bias(30.0), 10.0);
+        assert!((FaultType::Ramp1.bias(18.0) - 18.0).abs() < 1e-12);
+        assert!((FaultType::Ramp05.bias(34.0) - 17.0).abs() < 1e-12);
+        assert!((FaultType::Ramp03.bias(60.0) - 18.0).abs() < 1e-12);
+        let f = FaultSpec { prn: 7, kind: FaultType::Ramp1, start: 300.0, end: 360.0 };
+        assert_eq!(f.bias(7, 299.0), 0.0);
+        assert_eq!(f.bias(7, 310.0), 10.0);
+        assert_eq!(f.bias(8, 310.0), 0.0);
+        assert_eq!(f.bias(7, 360.0), 0.0);
+    }
+
+    #[test]
+    fn environments_match_table3() {
+        let cfg = SimConfig::default();
+        let world = World::new(&cfg).unwrap();
+        let envs = environments(&world, &cfg).unwrap();
+        let n: Vec<usize> = envs.iter().map(|e| e.prns.len()).collect();
+        assert_eq!(n, vec![9, 5, 5, 5, 6]);
+        // Same faulty satellite in Env 1/2 and in Env 3/4, tracked in each.
+        assert_eq!(envs[0].faulty_prn, envs[1].faulty_prn);
+        assert_eq!(envs[2].faulty_prn, envs[3].faulty_prn);
+        assert!(envs.iter().all(|e| e.prns.contains(&e.faulty_prn)));
+        // Configuration 2 loses far more geometry than configuration 1.
+        assert!(envs[3].pdop_without_faulty > 5.0 * envs[2].pdop_without_faulty, "{envs:?}");
+        assert!(envs[1].pdop_without_faulty > 3.0 * envs[0].pdop_without_faulty);
+        assert_eq!((envs[0].fault_start, envs[2].fault_start, envs[4].fault_start), (199.0, 256.0, 300.0));
+    }
+
+    /// EKF consistency: averaged NEES of the 17-dim error state over Monte
+    /// Carlo runs stays inside the two-sided 99 % chi-square band.
+    #[test]
+    fn nees_within_chi_square_bounds() {
+        let mut cfg = SimConfig::white_noise_only();
+        cfg.duration = 240.0;
+        let world = World::new(&cfg).unwrap();
+        let envs = environments(&world, &cfg).unwrap();
+        let m = 12usize;
+        let mut sum: Vec<f64> = Vec::new();
+        for seed in 0..m as u64 {
+            let spec = RunSpec {
+                world: &world,
+                cfg: &cfg,
+                prns: &envs[0].prns,
+                watch_prn: envs[0].faulty_prn,
+                fault: None,
+                fdsr: FdsrConfig { strategy: Strategy::None, alpha: 0.001, eta: 0.1 },
+                seed: 100 + seed,
+            };
+            let r = run(&spec).unwrap();
+            if sum.is_empty() {
+                sum = vec![0.0; r.nees.len()];
+            }
+            for (s, v) in sum.iter_mut().zip(&r.nees) {
+                assert!(v.is_finite());
+                *s += v;
+            }
+        }
+        let dof = (N * m) as f64;
+        let lo = chi2_quantile(0.005, dof).unwrap() / m as f64;
+        let hi = chi2_quantile(0.995, dof).unwrap() / m as f64;
+        let anees: Vec<f64> = sum.iter().map(|s| s / m as f64).collect();
+        let inside = anees.iter().filter(|a| **a >= lo && **a <= hi).count() as f64 / anees.len() as f64;
+        let mean = anees.iter().sum::<f64>() / anees.len() as f64;
+        eprintln!("ANEES mean {mean:.2} (dof {N}), band [{lo:.2}, {hi:.2}], inside {inside:.3}");
+        assert!(inside >= 0.9, "only {inside} of epochs inside [{lo}, {hi}]");
+        assert!((0.85 * N as f64..=1.15 * N as f64).contains(&mean), "mean ANEES {mean}");
+    }
 }

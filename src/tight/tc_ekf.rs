@@ -545,3 +545,51 @@ mod tests {
         assert_relative_eq!(ekf.p[(POS + 2, CLK)], -900.0 / 118.0, epsilon = 1e-9);
     }
 }
+
+#[cfg(all(test, not(target_arch = "wasm32")))]
+mod prop {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+        /// Any sequence of time updates and pseudo-range updates keeps P
+        /// symmetric and positive semi-definite (Joseph form + symmetrize).
+        #[test]
+        fn covariance_stays_symmetric_psd(
+            steps in proptest::collection::vec((0.001f64..0.5, -2.0f64..2.0, -0.5f64..0.5), 1..40),
+            sats in proptest::collection::vec((-1.0f64..1.0, -1.0f64..1.0, -1.0f64..-0.05, -50.0f64..50.0), 1..8),
+            sigma in 0.3f64..20.0,
+        ) {
+            let mut cfg = EkfConfig::default();
+            cfg.sigma_pr = sigma;
+            let x0 = NavState {
+                q: UnitQuaternion::identity(),
+                v: Vector3::new(10.0, 0.0, 0.0),
+                p: Vector3::zeros(),
+                bg: Vector3::zeros(),
+                ba: Vector3::zeros(),
+                clk: 0.0,
+                drift: 0.0,
+            };
+            let mut ekf = TcEkf::new(x0, cfg).unwrap();
+            for (k, (dt, a, w)) in steps.iter().enumerate() {
+                ekf.propagate(&Vector3::new(0.0, 0.0, *w), &Vector3::new(*a, 0.0, -GRAVITY), *dt);
+                if k % 3 == 0 {
+                    let meas: Vec<PrMeas> = sats.iter().enumerate().map(|(i, (x, y, z, err))| {
+                        let dir = Vector3::new(*x, *y, *z).normalize();
+                        let sat = dir * 2.2e7;
+                        PrMeas { prn: i as u8 + 1, pr: (sat - ekf.x.p).norm() + ekf.x.clk + err, sat }
+                    }).collect();
+                    let lin = ekf.linearize(&meas);
+                    let _ = ekf.update(&lin);
+                }
+                let asym = (ekf.p - ekf.p.transpose()).abs().max();
+                prop_assert!(asym <= 1e-9 * ekf.p.abs().max().max(1.0), "asymmetry {asym}");
+                let eig = ekf.p.symmetric_eigenvalues();
+                let scale = ekf.p.abs().max();
+                prop_assert!(eig.min() >= -1e-9 * scale, "negative eigenvalue {} (scale {scale})", eig.min());
+            }
+        }
+    }
+}

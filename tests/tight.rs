@@ -1,0 +1,136 @@
+//! Tightly coupled GNSS/INS (Shen et al. 2022, `../shared/papers/shen2022_gan_fdsr.txt`):
+//! FDI names the faulty satellite, and the paper's qualitative results hold
+//! (RDPOP larger in poor geometry; FI/FA errors larger in Env 2 and Env 4).
+#![cfg(not(target_arch = "wasm32"))]
+
+use navguard::tight::fdi::{FdsrConfig, Strategy};
+use navguard::tight::scenario::{environments, run, run_case, run_with_rows, CaseResult, Environment, FaultSpec, FaultType, RunSpec, SimConfig, World};
+use navguard::tight::stream::{parse_csv, to_csv, Status, TightConfig, TightDetector};
+
+fn setup() -> (SimConfig, World, Vec<Environment>) {
+    let cfg = SimConfig::default();
+    let world = World::new(&cfg).unwrap();
+    let envs = environments(&world, &cfg).unwrap();
+    (cfg, world, envs)
+}
+
+const SEEDS: [u64; 4] = [1, 2, 3, 4];
+
+fn cases(world: &World, cfg: &SimConfig, env: &Environment) -> Vec<CaseResult> {
+    SEEDS.iter().map(|&s| run_case(world, cfg, env, FaultType::Step20, 0.035, s, &env.name).unwrap()).collect()
+}
+
+fn mean_rms(cases: &[CaseResult], label: &str) -> f64 {
+    cases
+        .iter()
+        .map(|c| c.record(label).unwrap().rms(c.fault.start, c.fault.end))
+        .sum::<f64>()
+        / cases.len() as f64
+}
+
+#[test]
+fn fdi_flags_20m_step_at_onset_and_names_the_satellite() {
+    let (cfg, world, envs) = setup();
+    for env in &envs {
+        let fault = FaultSpec { prn: env.faulty_prn, kind: FaultType::Step20, start: env.fault_start, end: env.fault_end };
+        for seed in [1, 2] {
+            let spec = RunSpec {
+                world: &world,
+                cfg: &cfg,
+                prns: &env.prns,
+                watch_prn: env.faulty_prn,
+                fault: Some(fault),
+                fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
+                seed,
+            };
+            let r = run(&spec).unwrap();
+            let i = r.t.iter().position(|&t| t >= fault.start).unwrap();
+            assert_eq!(r.t[i], fault.start);
+            // The very first faulty epoch flags the right satellite...
+            assert_eq!(r.flagged_prn[i], env.faulty_prn, "{} seed {seed}: flagged G{} at onset", env.name, r.flagged_prn[i]);
+            assert_eq!(r.detection_delay(env.faulty_prn, fault.start, fault.end), Some(0.0));
+            assert!(r.lambda_faulty[i].abs() > 3.29, "λ {}", r.lambda_faulty[i]);
+            // ...and no other satellite is blamed during the fault.
+            assert_eq!(r.wrong_flags(env.faulty_prn, fault.start, fault.end), 0, "{}", env.name);
+            // Before the fault, false alarms stay rare (α = 0.001 per satellite).
+            let fa = r.t.iter().zip(&r.flagged_prn).filter(|(t, p)| **t < fault.start && **p != 0).count();
+            assert!(fa <= 2, "{} seed {seed}: {fa} false alarms before the fault", env.name);
+        }
+    }
+}
+
+#[test]
+fn rdpop_is_larger_in_poor_geometry() {
+    let (cfg, world, envs) = setup();
+    let rd = |env: &Environment| {
+        let spec = RunSpec {
+            world: &world,
+            cfg: &cfg,
+            prns: &env.prns,
+            watch_prn: env.faulty_prn,
+            fault: None,
+            fdsr: FdsrConfig { strategy: Strategy::None, alpha: 0.001, eta: 0.035 },
+            seed: 1,
+        };
+        let r = run(&spec).unwrap();
+        r.mean_of(&r.rdpop_faulty, env.fault_start, env.fault_end)
+    };
+    let v: Vec<f64> = envs.iter().map(rd).collect();
+    assert!(v.iter().all(|x| x.is_finite() && *x > 0.0), "{v:?}");
+    assert!(v[1] > 1.3 * v[0], "Env 2 RDPOP {} vs Env 1 {}", v[1], v[0]);
+    assert!(v[3] > 1.3 * v[2], "Env 4 RDPOP {} vs Env 3 {}", v[3], v[2]);
+    // The default η separates good from poor geometry.
+    assert!(v[0] < 0.035 && v[2] < 0.035 && v[1] > 0.035 && v[3] > 0.035, "{v:?}");
+}
+
+#[test]
+fn fi_and_fa_errors_blow_up_in_env2_and_env4() {
+    let (cfg, world, envs) = setup();
+    let runs: Vec<Vec<CaseResult>> = envs.iter().take(4).map(|e| cases(&world, &cfg, e)).collect();
+    for label in ["FDI", "FDA"] {
+        let e: Vec<f64> = runs.iter().map(|c| mean_rms(c, label)).collect();
+        assert!(e[1] > 1.5 * e[0], "{label}: Env 2 {} vs Env 1 {}", e[1], e[0]);
+        assert!(e[3] > 1.5 * e[2], "{label}: Env 4 {} vs Env 3 {}", e[3], e[2]);
+        // In good geometry isolating the satellite costs almost nothing.
+        let ff: Vec<f64> = runs.iter().map(|c| mean_rms(c, "FF")).collect();
+        assert!(e[0] < 1.2 * ff[0] && e[2] < 1.2 * ff[2], "{label}: {e:?} vs FF {ff:?}");
+    }
+}
+
+#[test]
+fn streaming_detector_names_the_faulty_satellite_from_csv() {
+    let (cfg, world, envs) = setup();
+    let env = &envs[0];
+    let fault = FaultSpec { prn: env.faulty_prn, kind: FaultType::Step20, start: env.fault_start, end: env.fault_end };
+    let spec = RunSpec {
+        world: &world,
+        cfg: &cfg,
+        prns: &env.prns,
+        watch_prn: env.faulty_prn,
+        fault: Some(fault),
+        fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
+        seed: 7,
+    };
+    let (_, rows, init) = run_with_rows(&spec).unwrap();
+    // Through the documented CSV format and back.
+    let rows = parse_csv(&to_csv(&rows)).unwrap();
+    assert_eq!(rows.len(), 8400);
+    assert_eq!(rows.iter().filter(|r| !r.pr.is_empty()).count(), 420);
+    let tc = TightConfig { t0: world.t0, strategy: Strategy::Fdi, initial: Some(init), ..TightConfig::default() };
+    let mut det = TightDetector::new(tc).unwrap();
+    let out = det.run(&rows).unwrap();
+    let first = out.iter().find(|o| o.t >= fault.start - 1e-9 && o.status != Status::NoGnss).unwrap();
+    assert!((first.t - fault.start).abs() < 1e-6);
+    assert_eq!(first.status, Status::Fault);
+    assert_eq!(first.faulty_prn, Some(env.faulty_prn));
+    let during: Vec<_> = out.iter().filter(|o| o.t >= fault.start && o.t < fault.end && o.status != Status::NoGnss).collect();
+    assert!(during.iter().all(|o| o.faulty_prn == Some(env.faulty_prn)), "all epochs in the section name G{}", env.faulty_prn);
+    let before = out.iter().filter(|o| o.t < fault.start && o.status == Status::Fault).count();
+    assert!(before <= 2, "{before} false alarms before the fault");
+    // The estimate follows the flown path: start (0, 0, −100), 15 m/s north.
+    let p = out[199].position_ned;
+    assert!((p[0] - 150.0).abs() < 15.0 && p[1].abs() < 15.0 && (p[2] + 100.0).abs() < 15.0, "{p:?}");
+    // Through serde (the wasm facade's path).
+    let js = serde_json::to_string(&out[out.len() - 1]).unwrap();
+    assert!(js.contains("\"status\""), "{js}");
+}
