@@ -742,7 +742,7 @@ impl SpeedBands {
 // ---------------------------------------------------------------- stream
 
 /// Ring buffer of the last `w` samples for the two-stage evaluation.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 struct TwoStage {
     w: usize,
     r: Vec<f64>,
@@ -828,7 +828,7 @@ impl TwoStage {
 /// Streaming evaluator over a [`ThresholdPool`]: O(w) memory, O(1) per
 /// sample except O(w) on a fault confirmation, a mode change, or (RT) once
 /// every `w` samples to refresh the running sum of squares exactly.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Evaluator {
     pool: ThresholdPool,
     core: TwoStage,
@@ -1091,6 +1091,21 @@ mod tests {
         assert_eq!(a.sigma, b.sigma);
         assert_eq!(a.model.sigma, b.model.sigma);
         assert_eq!((back.method, back.w), (pool.method, pool.w));
+    }
+
+    #[test]
+    fn usage_example_from_the_docs() -> Result<(), String> {
+        let (normal_07, normal_10) = (noisy(1000, 1), noisy(1000, 2));
+        let pool = ThresholdPool::fit(Method::At, &[&normal_07[..], &normal_10[..]], &AdaptiveConfig::default())?;
+        let bands = SpeedBands::around(&[0.7, 1.0])?;
+        let mut ev = Evaluator::new(pool)?;
+        let mut faults = 0;
+        for k in 0..300 {
+            let residual = if (150..170).contains(&k) { 1.0 } else { normal_07[k] };
+            faults += ev.push(residual, bands.mode_of(0.72)?)?.is_fault() as usize;
+        }
+        assert!((15..=20).contains(&faults), "{faults}");
+        Ok(())
     }
 
     #[test]
