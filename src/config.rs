@@ -142,9 +142,6 @@ impl ConfigInput {
             Some(m) => Method::parse(m)?,
             None => d.method,
         };
-        if matches!(method, Method::Rms | Method::Knee | Method::Adaptive) {
-            return Err(format!("config.method: \"{}\" is not wired into the streaming detector yet", method.name()));
-        }
         let n = &d.noise;
         let outage_timeout = match self.outage_timeout {
             None => None,

@@ -44,7 +44,7 @@ use crate::config::Config;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Kf};
 use crate::frames::Anchor;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
-use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method};
+use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 use crate::sample::Sample;
 
 /// A trained model: ANFIS parameters plus the initial databases D1₀, D2₀.
@@ -354,6 +354,8 @@ pub struct Detector {
     maha: [MahaWindow; 2],
     /// Largest-γ baro innovation (ν, S) since the last GPS epoch.
     baro_inn: Option<(f64, f64)>,
+    /// Threshold pool of the `rms`, `knee` and `adaptive` methods.
+    pool: Option<PoolState>,
 }
 
 impl Detector {
@@ -363,7 +365,13 @@ impl Detector {
             Some(m) => m.clone(),
             None => Model::embedded()?,
         };
-        Ok(Self::with_model(cfg, &model))
+        let pool = match cfg.method {
+            Method::Rms | Method::Knee | Method::Adaptive => Some(methods::default_pool(cfg.method)?),
+            _ => None,
+        };
+        let mut det = Self::with_model(cfg, &model);
+        det.pool = pool;
+        Ok(det)
     }
 
     pub fn with_model(cfg: Config, model: &Model) -> Self {
@@ -407,6 +415,7 @@ impl Detector {
             prev_nu: None,
             maha: Default::default(),
             baro_inn: None,
+            pool: None,
             cfg,
         }
     }
@@ -462,6 +471,11 @@ impl Detector {
     /// The local NED anchor (first valid fix), once known.
     pub fn anchor(&self) -> Option<Anchor> {
         self.anchor
+    }
+
+    /// Filter velocity estimate NED (m/s), once initialised.
+    pub fn velocity(&self) -> Option<Vector3<f64>> {
+        self.kf.as_ref().map(|k| k.velocity())
     }
 
     /// Filter position estimate NED (m), once initialised.
@@ -778,8 +792,11 @@ impl Detector {
             Method::Nis => Some(methods::nis(&inn)),
             Method::Gate => Some(methods::gate(&inn)),
             Method::Mahalanobis => Some(methods::mahalanobis(&self.maha, dr, inn.m == 6)),
-            // Refused by the config check until the threshold pools are wired in.
-            Method::Rms | Method::Knee | Method::Adaptive => None,
+            Method::Rms | Method::Knee | Method::Adaptive => {
+                let v = kf.velocity();
+                let speed = v[0].hypot(v[1]);
+                self.pool.as_mut().map(|p| p.decide(&inn, speed))
+            }
         };
         let f = dec.map_or(f_anfis, |d| d.score);
         let th = if dec.is_some() { 1.0 } else { self.cfg.threshold };

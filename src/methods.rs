@@ -28,6 +28,8 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::thresholds::{AdaptiveConfig, Evaluator, Method as ThMethod, SpeedBands, ThresholdPool, Verdict};
+
 /// Detection method (`config.method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -313,6 +315,91 @@ pub fn mahalanobis(win: &[MahaWindow; 2], dr: [[f64; 3]; 2], has_vel: bool) -> D
         }
     }
     Decision { score: worst, failed }
+}
+
+/// A Baek & Jo threshold pool on the detector's residual (the epoch's
+/// largest normalised innovation), one threshold per speed band.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct PoolState {
+    pub bands: SpeedBands,
+    pub eval: Evaluator,
+}
+
+impl PoolState {
+    /// Decide one epoch at horizontal speed `speed` (m/s).
+    pub fn decide(&mut self, inn: &EpochInnovations, speed: f64) -> Decision {
+        let (grp, g) = inn.gamma().fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
+        let mode = self.bands.mode_of(speed).unwrap_or(0);
+        let rt = self.eval.rms_threshold(mode);
+        let mut failed = [false; 3];
+        let score = match self.eval.push(g, mode) {
+            Ok(v) if v.is_fault() => {
+                failed[grp] = true;
+                rt.map_or(1.0, |t| (g / t).max(1.0))
+            }
+            // RT has a continuous ratio; the two-stage methods only have
+            // their stages: an anomaly (first stage) scores 0.5.
+            Ok(Verdict::Anomaly) => 0.5,
+            Ok(_) => rt.map_or(0.0, |t| (g / t).min(0.99)),
+            Err(_) => 0.0,
+        };
+        Decision { score, failed }
+    }
+}
+
+/// The pool for `method` (rms, knee or adaptive), fitted once per process on
+/// clean simulated flights and cached: reproducible from the code, never a
+/// stored constant. Speed bands split the training epochs into quartiles.
+pub fn default_pool(method: Method) -> Result<PoolState, String> {
+    use std::sync::OnceLock;
+    static POOLS: OnceLock<Result<[PoolState; 3], String>> = OnceLock::new();
+    let k = match method {
+        Method::Rms => 0,
+        Method::Knee => 1,
+        Method::Adaptive => 2,
+        m => return Err(format!("method \"{}\" has no threshold pool", m.name())),
+    };
+    let pools = POOLS.get_or_init(|| fit_pools(1000..1006)).as_ref().map_err(|e| e.clone())?;
+    Ok(pools[k].clone())
+}
+
+/// Collect (speed, largest γ) at every GPS epoch of clean flights, with the
+/// verdicts forced normal, and fit RT, KT and AT pools over speed quartiles.
+pub fn fit_pools(seeds: core::ops::Range<u64>) -> Result<[PoolState; 3], String> {
+    use crate::sim::{simulate, Scenario, Trajectory};
+    let mut data: Vec<(f64, f64)> = vec![];
+    for seed in seeds {
+        for tr in [Trajectory::Aggressive, Trajectory::Survey, Trajectory::Paper] {
+            let rows = simulate(&Scenario::clean(tr, seed, 300.0))?;
+            let cfg = crate::Config { method: Method::Chi2, ..crate::Config::default() };
+            let mut det = crate::Detector::new(cfg)?;
+            det.set_oracle(true);
+            for s in &rows {
+                let o = det.push(s).map_err(|e| e.to_string())?;
+                if o.gps_epoch && o.f > 0.0 {
+                    let v = det.velocity().unwrap_or_else(Vector3::zeros);
+                    data.push((v[0].hypot(v[1]), o.f * N_ALPHA_HALF));
+                }
+            }
+        }
+    }
+    let mut speeds: Vec<f64> = data.iter().map(|d| d.0).collect();
+    speeds.sort_by(f64::total_cmp);
+    let q = |p: f64| speeds[((speeds.len() as f64 * p) as usize).min(speeds.len().saturating_sub(1))];
+    let mut edges = vec![q(0.25), q(0.5), q(0.75)];
+    edges.dedup_by(|a, b| *a <= *b + 1e-6);
+    let bands = SpeedBands::new(edges)?;
+    let mut per: Vec<Vec<f64>> = vec![vec![]; bands.modes()];
+    for (v, g) in &data {
+        per[bands.mode_of(*v)?].push(*g);
+    }
+    let per_ref: Vec<&[f64]> = per.iter().map(|v| v.as_slice()).collect();
+    let cfg = AdaptiveConfig::default();
+    let fit = |m: ThMethod| -> Result<PoolState, String> {
+        let pool = ThresholdPool::fit(m, &per_ref, &cfg)?;
+        Ok(PoolState { bands: bands.clone(), eval: Evaluator::new(pool)? })
+    };
+    Ok([fit(ThMethod::Rt)?, fit(ThMethod::Kt)?, fit(ThMethod::At)?])
 }
 
 /// How [`MAHA_D2`] was set: the 99.9th percentile of the Mahalanobis d²
