@@ -68,11 +68,11 @@ fn real_main() -> Result<(), String> {
     let envs = environments(&world, &cfg).map_err(|e| e.to_string())?;
     println!("# Tightly coupled GNSS/INS, Shen et al. 2022 without the GAN");
     println!(
-        "constellation: {} satellites, 6 planes; site {:?}; start t0 = {} s; seeds {seed}..{}; T1 = {:.3} (alpha 0.001), eta = {eta}",
+        "constellation: {} satellites, 6 planes; site {:?}; start t0 = {} s; seeds {seed}..={}; T1 = {:.3} (alpha 0.001), eta = {eta}",
         cfg.n_sats,
         cfg.site,
         world.t0,
-        seed + n_runs,
+        seed + n_runs - 1,
         navguard::tight::fdi::threshold_t1(0.001).map_err(|e| e.to_string())?
     );
     println!();
@@ -161,6 +161,7 @@ fn real_main() -> Result<(), String> {
             })
             .collect(),
         hline: Some(eta),
+        shade: None,
     }];
     write_svg(&out_dir, "tight_fig7_rdpop.svg", "Figure 7: RDPOP per environment", &fig7)?;
     write_bars(&out_dir, "tight_fig12_relative_error.svg", &format!("Figure 12: mean positioning error relative to fault-free, 300-360 s (m), {n_runs} runs"), &LABELS[1..], &bars)?;
@@ -177,6 +178,8 @@ struct Panel {
     y_label: String,
     series: Vec<(String, Vec<(f64, f64)>)>,
     hline: Option<f64>,
+    /// Shaded x interval (the fault section).
+    shade: Option<(f64, f64)>,
 }
 
 fn panel(c: &CaseResult, a: f64, b: f64, title: &str) -> Panel {
@@ -194,6 +197,7 @@ fn panel(c: &CaseResult, a: f64, b: f64, title: &str) -> Panel {
             })
             .collect(),
         hline: None,
+        shade: Some((c.fault.start, c.fault.end)),
     }
 }
 
@@ -254,6 +258,10 @@ fn write_svg(dir: &str, name: &str, title: &str, panels: &[Panel]) -> Result<(),
         }
         let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#, (l + r) / 2.0, b + 30.0, esc(&p.x_label));
         let _ = writeln!(s, r#"<text x="{0}" y="{1}" text-anchor="middle" transform="rotate(-90 {0} {1})">{2}</text>"#, ox + 14.0, (t + b) / 2.0, esc(&p.y_label));
+        if let Some((a, b2)) = p.shade {
+            let (xa, xb) = (sx(a.max(x0)), sx(b2.min(x1)));
+            let _ = writeln!(s, r##"<rect x="{xa:.1}" y="{t}" width="{:.1}" height="{}" fill="#f3e0e0"/>"##, (xb - xa).max(0.0), b - t);
+        }
         if let Some(hl) = p.hline {
             let _ = writeln!(s, r##"<line x1="{l}" y1="{0:.1}" x2="{r}" y2="{0:.1}" stroke="#999" stroke-dasharray="4 3"/>"##, sy(hl));
         }

@@ -184,6 +184,12 @@ impl World {
     }
 }
 
+/// Env 5 takes the worst PDOP without the faulty satellite below this bound
+/// (a finite, if poor, 5-satellite fix). A milder bound (8) was tried: the
+/// faulty satellite then matters less for the step faults but the gradual
+/// faults are still absorbed by the filter, with larger errors.
+pub const ENV5_MAX_PDOP: f64 = 100.0;
+
 /// An observation environment (Table 3).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Environment {
@@ -331,7 +337,7 @@ pub fn environments(world: &World, cfg: &SimConfig) -> Result<Vec<Environment>, 
                 continue;
             }
             let w = pd(&s, t5);
-            if !w.is_finite() || w > 100.0 {
+            if !w.is_finite() || w > ENV5_MAX_PDOP {
                 continue;
             }
             if best5.as_ref().is_none_or(|(b, ..)| w > *b) {

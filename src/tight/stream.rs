@@ -359,12 +359,22 @@ pub fn least_squares_fix(meas: &[PrMeas]) -> Option<(Vector3<f64>, f64)> {
 
 const IMU_COLS: [&str; 7] = ["t", "gx", "gy", "gz", "ax", "ay", "az"];
 
-/// Parse the `pr_<prn>` CSV row format. Blank lines and lines starting with
-/// `#` are skipped. Errors name the line, the column and the bad value.
+/// Parse CSV rows. Two layouts, chosen by the header:
+///
+/// * wide: `t,gx,gy,gz,ax,ay,az,pr_<prn>...`, one row per IMU sample;
+/// * long: `t,gx,gy,gz,ax,ay,az,sat_id,pr`, one row per satellite; rows
+///   with the same `t` (consecutive) form one epoch and must repeat the
+///   same IMU values; a row with empty `sat_id` and `pr` is IMU-only.
+///
+/// Blank lines and lines starting with `#` are skipped. Errors name the
+/// line, the column and the bad value.
 pub fn parse_csv(text: &str) -> Result<Vec<EpochRow>, TightError> {
     let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
     let (_, header) = lines.next().ok_or_else(|| TightError::new("header", "empty input: no header line"))?;
     let cols: Vec<&str> = header.split(',').map(|c| c.trim()).collect();
+    if cols.contains(&"sat_id") {
+        return parse_long(&cols, lines);
+    }
     let mut imu_idx = [usize::MAX; 7];
     let mut pr_cols: Vec<(usize, u8)> = Vec::new();
     for (i, c) in cols.iter().enumerate() {
@@ -417,6 +427,67 @@ pub fn parse_csv(text: &str) -> Result<Vec<EpochRow>, TightError> {
     Ok(rows)
 }
 
+fn parse_long<'a>(cols: &[&str], lines: impl Iterator<Item = (usize, &'a str)>) -> Result<Vec<EpochRow>, TightError> {
+    let want = ["t", "gx", "gy", "gz", "ax", "ay", "az", "sat_id", "pr"];
+    for c in cols {
+        if !want.contains(c) {
+            return Err(TightError::new(*c, "unknown column (long layout: t, gx, gy, gz, ax, ay, az, sat_id, pr)"));
+        }
+    }
+    let mut idx = [usize::MAX; 9];
+    for (k, w) in want.iter().enumerate() {
+        let found: Vec<usize> = cols.iter().enumerate().filter(|(_, c)| *c == w).map(|(i, _)| i).collect();
+        match found.as_slice() {
+            [i] => idx[k] = *i,
+            [] => return Err(TightError::new(*w, "required column missing from the header")),
+            _ => return Err(TightError::new(*w, "column appears twice in the header")),
+        }
+    }
+    let mut rows: Vec<EpochRow> = Vec::new();
+    for (ln, line) in lines {
+        let lno = ln + 1;
+        let cells: Vec<&str> = line.split(',').map(|c| c.trim()).collect();
+        if cells.len() != cols.len() {
+            return Err(TightError::new(format!("line {lno}"), format!("{} cells, header has {}", cells.len(), cols.len())));
+        }
+        let num = |k: usize| -> Result<f64, TightError> {
+            let s = cells[idx[k]];
+            s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| TightError::new(format!("line {lno}: {}", want[k]), format!("must be a finite number, got {s:?}")))
+        };
+        let mut v = [0.0; 7];
+        for (k, x) in v.iter_mut().enumerate() {
+            *x = num(k)?;
+        }
+        let (sid, prs) = (cells[idx[7]], cells[idx[8]]);
+        let obs = if sid.is_empty() && (prs.is_empty() || prs.eq_ignore_ascii_case("nan")) {
+            None
+        } else {
+            let prn: u8 = sid
+                .parse()
+                .ok()
+                .filter(|p| *p >= 1)
+                .ok_or_else(|| TightError::new(format!("line {lno}: sat_id"), format!("must be an integer 1..=255, got {sid:?}")))?;
+            if prs.is_empty() || prs.eq_ignore_ascii_case("nan") {
+                None
+            } else {
+                Some(PrObs { prn, pr: num(8)? })
+            }
+        };
+        match rows.last_mut() {
+            Some(last) if last.t == v[0] => {
+                if last.gyro != [v[1], v[2], v[3]] || last.accel != [v[4], v[5], v[6]] {
+                    return Err(TightError::new(format!("line {lno}: gx..az"), format!("IMU values differ from the previous row of the same epoch t = {}", v[0])));
+                }
+                if let Some(o) = obs {
+                    last.pr.push(o);
+                }
+            }
+            _ => rows.push(EpochRow { t: v[0], gyro: [v[1], v[2], v[3]], accel: [v[4], v[5], v[6]], pr: obs.into_iter().collect() }),
+        }
+    }
+    Ok(rows)
+}
+
 /// Write rows in the `pr_<prn>` CSV format (columns for every satellite
 /// that appears; empty cell where a row has no pseudo-range for it).
 pub fn to_csv(rows: &[EpochRow]) -> String {
@@ -455,6 +526,23 @@ mod tests {
         assert_eq!(rows[1].accel, [0.1, 0.0, -9.8]);
         let again = parse_csv(&to_csv(&rows)).unwrap();
         assert_eq!(again, rows);
+    }
+
+    #[test]
+    fn long_layout_with_sat_id() {
+        let text = "t,gx,gy,gz,ax,ay,az,sat_id,pr\n0.05,0,0,0,0,0,-9.8,,\n1,0,0,0,0,0,-9.8,3,20000000.5\n1,0,0,0,0,0,-9.8,17,21000000\n1,0,0,0,0,0,-9.8,9,NaN\n";
+        let rows = parse_csv(text).unwrap();
+        assert_eq!(rows.len(), 2);
+        assert!(rows[0].pr.is_empty());
+        assert_eq!(rows[1].pr, vec![PrObs { prn: 3, pr: 20000000.5 }, PrObs { prn: 17, pr: 21000000.0 }]);
+        // Same as the wide layout.
+        let wide = parse_csv("t,gx,gy,gz,ax,ay,az,pr_3,pr_17\n0.05,0,0,0,0,0,-9.8,,\n1,0,0,0,0,0,-9.8,20000000.5,21000000\n").unwrap();
+        assert_eq!(rows, wide);
+        let e = parse_csv("t,gx,gy,gz,ax,ay,az,sat_id,pr\n1,0,0,0,0,0,-9.8,3,2e7\n1,0,0,0,0.5,0,-9.8,4,2e7\n").unwrap_err();
+        assert!(e.field.contains("line 3"), "{e}");
+        let e = parse_csv("t,gx,gy,gz,ax,ay,az,sat_id,pr\n1,0,0,0,0,0,-9.8,G7,2e7\n").unwrap_err();
+        assert_eq!(e.field, "line 2: sat_id");
+        assert!(e.message.contains("\"G7\""));
     }
 
     #[test]
