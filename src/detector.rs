@@ -440,6 +440,12 @@ impl Detector {
         for w in &self.maha {
             w.check_shape()?;
         }
+        let pooled = matches!(self.cfg.method, Method::Rms | Method::Knee | Method::Adaptive);
+        match &self.pool {
+            Some(p) if pooled => p.eval.check_shape()?,
+            None if !pooled => {}
+            _ => return Err(format!("threshold pool present/absent does not match method \"{}\"", self.cfg.method.name())),
+        }
         self.train_x = Vec::with_capacity(2 * q);
         self.train_y = Vec::with_capacity(2 * q);
         Ok(())

@@ -172,14 +172,16 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+        #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
         /// Any split point, any scenario kind: snapshot, restore and continue
         /// give the same statuses and F values, bit for bit.
         #[test]
         fn split_anywhere(kind in 0usize..4, seed in 1u64..50, frac in 0.0f64..1.0, frac2 in 0.0f64..1.0) {
             let name = ["paper", "step", "noise", "baro-stuck"][kind];
             let rows = sim::simulate(&sim::Scenario::preset(name, seed).unwrap()).unwrap();
-            let cfg = Config { tc: 20, ..Config::default() };
+            // Every method's state must survive too (windows, pools).
+            let method = crate::methods::Method::ALL[(seed as usize) % crate::methods::Method::ALL.len()];
+            let cfg = Config { tc: 20, method, ..Config::default() };
             let mut whole = Detector::new(cfg.clone()).unwrap();
             let all = run(&mut whole, &rows);
             let (c1, c2) = {

@@ -614,7 +614,9 @@ pub fn fit_adaptive(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<AdaptiveT
 
 /// One operating mode's fitted threshold.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
-#[serde(rename_all = "lowercase", tag = "method")]
+// Externally tagged (serde's default): detector snapshots use postcard,
+// which cannot read internally tagged enums.
+#[serde(rename_all = "lowercase")]
 pub enum ModeThreshold {
     Rt(RmsThreshold),
     Kt(KneeThreshold),
@@ -846,6 +848,18 @@ impl Evaluator {
 
     pub fn pool(&self) -> &ThresholdPool {
         &self.pool
+    }
+
+    /// The pool validates and the ring buffers match its window (a state
+    /// read back from a snapshot may be corrupt or forged).
+    pub fn check_shape(&self) -> Result<(), String> {
+        self.pool.check()?;
+        let c = &self.core;
+        let w = self.pool.w;
+        if c.w != w || c.r.len() != w || c.anomalous.len() != w || c.confirmed.len() != w || c.head >= w || c.len > w || c.count > w {
+            return Err(format!("threshold evaluator: window {} / buffers {} / head {} / len {} / count {} inconsistent with w = {w}", c.w, c.r.len(), c.head, c.len, c.count));
+        }
+        Ok(())
     }
 
     /// Forget the stream (keep the pool).

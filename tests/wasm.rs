@@ -188,6 +188,25 @@ fn snapshot_and_restore_resume_bit_identically() {
     assert!(get(&e, "message").as_string().unwrap().contains("checksum"));
 }
 
+/// Every `config.method` streams through the facade: each flags the 20 m
+/// GPS step and no method's score is NaN on a GPS epoch.
+#[wasm_bindgen_test]
+fn every_method_streams_and_catches_a_step() {
+    for method in ["anfis", "chi2", "nis", "gate", "mahalanobis", "rms", "knee", "adaptive"] {
+        let (cols, t, label) = scenario("step", 2);
+        let cfg = Object::new();
+        Reflect::set(&cfg, &"method".into(), &method.into()).unwrap();
+        let mut det = Detector::new(cfg.into()).unwrap();
+        let out = det.push_columns(&cols).unwrap();
+        let status = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
+        let f = get(&out, "f").dyn_into::<Float64Array>().unwrap().to_vec();
+        let m = metrics(&t, &label, &status).unwrap();
+        assert_eq!(rate(&m, "detectedIntervals"), 1.0, "{method}: step not detected");
+        assert!(label.iter().zip(&f).all(|(l, f)| l.is_nan() || !f.is_nan()), "{method}: NaN score");
+        assert_eq!(get(&det.config().unwrap(), "method").as_string().as_deref(), Some(method));
+    }
+}
+
 fn web_sys_log(s: &str) {
     wasm_bindgen_test::console_log!("{}", s);
 }
