@@ -61,7 +61,7 @@ pub fn w_test(pv: &DMatrix<f64>, v: &DVector<f64>) -> Option<DVector<f64>> {
     let mut lam = DVector::zeros(v.len());
     for i in 0..v.len() {
         let d = inv[(i, i)];
-        if !(d > 0.0) {
+        if d.is_nan() || d <= 0.0 {
             return None;
         }
         lam[i] = y[i] / libm::sqrt(d);
@@ -123,7 +123,7 @@ pub fn fault_estimate(pv: &DMatrix<f64>, v: &DVector<f64>, i: usize) -> Option<(
     }
     let inv = pv.clone().cholesky()?.inverse();
     let d = inv[(i, i)];
-    if !(d > 0.0) {
+    if d.is_nan() || d <= 0.0 {
         return None;
     }
     let y = (&inv * v)[i];
@@ -149,7 +149,7 @@ pub fn rdpop(p_pred: &Mat17, lin: &Linearized, i: usize) -> Option<f64> {
     let (_, iso) = isolate(p_pred, lin, i)?;
     let tr = |m: &Mat17| (POS..POS + 3).map(|j| m[(j, j)]).sum::<f64>();
     let base = tr(&full);
-    if !(base > 0.0) {
+    if base.is_nan() || base <= 0.0 {
         return None;
     }
     Some((tr(&iso) - base) / base)

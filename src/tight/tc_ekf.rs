@@ -337,7 +337,7 @@ impl TcEkf {
     /// Time update over `dt` (s) with raw gyro (rad/s) and accelerometer
     /// (m/s²) readings: mechanization plus eqs. 6–7 with Φ ≈ I + F dt + F²dt²/2.
     pub fn propagate(&mut self, gyro: &Vector3<f64>, accel: &Vector3<f64>, dt: f64) {
-        if !(dt > 0.0) {
+        if dt.is_nan() || dt <= 0.0 {
             return;
         }
         let w = gyro - self.x.bg;
@@ -561,8 +561,7 @@ mod prop {
             sats in proptest::collection::vec((-1.0f64..1.0, -1.0f64..1.0, -1.0f64..-0.05, -50.0f64..50.0), 1..8),
             sigma in 0.3f64..20.0,
         ) {
-            let mut cfg = EkfConfig::default();
-            cfg.sigma_pr = sigma;
+            let cfg = EkfConfig { sigma_pr: sigma, ..EkfConfig::default() };
             let x0 = NavState {
                 q: UnitQuaternion::identity(),
                 v: Vector3::new(10.0, 0.0, 0.0),
