@@ -68,6 +68,10 @@ struct Row {
     dt: Num,
     groups: u8,
     vals: [Num; 26],
+    /// Emit the row this many more times (0..=63), each `dt` later and with
+    /// the position moved by `drift` steps: long flights from short inputs.
+    repeat: u8,
+    drift: i8,
 }
 
 #[derive(Arbitrary, Debug)]
@@ -162,30 +166,40 @@ fuzz_target!(|data: &[u8]| {
     // `arbitrary` pads an exhausted input with zeros: stop at its end instead.
     while rows < 2000 && !u.is_empty() {
         let Ok(r) = Row::arbitrary(&mut u) else { break };
-        rows += 1;
-        t = match r.dt {
-            Num::Absent => t,
-            Num::Near(k) => t + f64::from(k.unsigned_abs()) * 1e-3,
-            Num::Raw(x) => x,
-        };
-        let mut s = Sample::at(t);
-        for (g, cols) in GROUPS.iter().enumerate() {
-            if r.groups & (1 << g) != 0 {
-                for &c in cols.iter() {
-                    s.set(c, r.vals[c].value(c));
+        let copies = 1 + u32::from(r.repeat % 64);
+        for k in 0..copies {
+            if rows >= 2000 {
+                break;
+            }
+            rows += 1;
+            t = match r.dt {
+                Num::Absent => t,
+                Num::Near(ms) => t + f64::from(ms.unsigned_abs()) * 1e-3,
+                Num::Raw(x) => x,
+            };
+            let mut s = Sample::at(t);
+            for (g, cols) in GROUPS.iter().enumerate() {
+                if r.groups & (1 << g) != 0 {
+                    for &c in cols.iter() {
+                        let mut v = r.vals[c].value(c);
+                        if (1..=6).contains(&c) {
+                            v += f64::from(r.drift) * f64::from(k) * BASE[c].1;
+                        }
+                        s.set(c, v);
+                    }
                 }
             }
-        }
-        let before = det.stats();
-        match det.push(&s) {
-            Ok(o) => {
-                assert!(o.status <= 1 && o.kind <= 3, "{o:?}");
-                assert!(o.t == s.t, "output time {} for row time {}", o.t, s.t);
-                assert!(!o.f.is_nan() || o.kind == 3, "F is NaN on a verdict row: {o:?} for {s:?}");
-            }
-            Err(e) => {
-                assert!(COLUMNS.contains(&e.field), "{e}");
-                assert_eq!(before, det.stats(), "a rejected row changed the detector");
+            let before = det.stats();
+            match det.push(&s) {
+                Ok(o) => {
+                    assert!(o.status <= 1 && o.kind <= 3, "{o:?}");
+                    assert!(o.t == s.t, "output time {} for row time {}", o.t, s.t);
+                    assert!(!o.f.is_nan() || o.kind == 3, "F is NaN on a verdict row: {o:?} for {s:?}");
+                }
+                Err(e) => {
+                    assert!(COLUMNS.contains(&e.field), "{e}");
+                    assert_eq!(before, det.stats(), "a rejected row changed the detector");
+                }
             }
         }
     }
