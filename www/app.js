@@ -4,6 +4,7 @@
 // Detector, snapshot kept in IndexedDB) is live.js with its own live-worker.js.
 import uPlot from './vendor/uPlot.esm.js';
 import { initLive } from './live.js';
+import { initCompare } from './compare.js';
 
 const $ = (sel) => document.querySelector(sel);
 const STAGES = ['reading', 'parsing', 'detecting', 'plotting'];
@@ -63,9 +64,14 @@ function startWorker() {
   };
   state.worker = w;
   state.workerHasLog = false;
+  if (compare) {
+    compare.workerRestarted();
+    compare.refresh();
+  }
   return w;
 }
 
+let compare = null; // the "Compare methods" panel (compare.js)
 let nextId = 1;
 function send(msg) {
   const id = nextId++;
@@ -107,6 +113,7 @@ function onWorkerMessage(m) {
     download(m.blob, `${baseName()}.per-sample.csv`);
     return;
   }
+  if (compare && compare.onMessage(m)) return;
   if (m.id !== state.job) return; // stale
   if (m.type === 'progress') {
     showProgress(m.stage, m.frac, m.detail);
@@ -114,6 +121,7 @@ function onWorkerMessage(m) {
     showError(m.message);
     if (state.jobKind !== 'rerun') state.workerHasLog = false;
     finishJob();
+    if (compare) compare.refresh();
     $('#config-state').textContent = '';
   } else if (m.type === 'result') {
     state.workerHasLog = true;
@@ -181,6 +189,7 @@ function fillScenarios(names) {
 
 function setConfigForm(cfg) {
   const f = $('#config');
+  f.method.value = cfg.method || 'anfis';
   f.tc.value = cfg.tc;
   f.window.value = cfg.window;
   f.threshold.value = cfg.threshold;
@@ -189,6 +198,7 @@ function setConfigForm(cfg) {
 function readConfig() {
   const f = $('#config');
   const cfg = {};
+  if (f.method.value) cfg.method = f.method.value;
   const tc = Number(f.tc.value), w = Number(f.window.value), th = Number(f.threshold.value);
   if (f.tc.value !== '' && Number.isFinite(tc)) cfg.tc = tc;
   if (f.window.value !== '' && Number.isFinite(w)) cfg.window = w;
@@ -232,6 +242,7 @@ function render(m) {
   $('#export-json').disabled = false;
   $('#export-csv').disabled = false;
   $('#config-state').textContent = `audit ${m.auditMs.toFixed(0)} ms`;
+  if (compare) compare.refresh();
 }
 
 const fmt = (x, d = 2) => (x == null || !Number.isFinite(x) ? '—' : x.toFixed(d));
@@ -259,6 +270,7 @@ function renderSummary(m) {
     ['Fault intervals', `<span class="tag fault">${counts.residual} residual</span> <span class="tag outage">${counts.gps_outage} outage</span> <span class="muted">${fmt(faultTime, 1)} s total</span>`],
     ['Data gaps', r.dataGaps.length ? r.dataGaps.map((g) => `${fmt(g.start, 1)}–${fmt(g.end, 1)} s`).join(', ') : 'none'],
     ['Missing inputs', r.missing.length ? `<span class="warn">${r.missing.map(esc).join(', ')}</span>` : 'none'],
+    ['Method', esc(methodOf(m))],
     ['Detector', `${r.stats.retrains} retrains, ${r.stats.filter_resets} filter resets${r.stats.filter_errors ? `, <span class="warn">${r.stats.filter_errors} filter errors</span>` : ''}`],
   ];
   let html = '<dl class="kv">' + rows.map(([k, v]) => `<dt>${k}</dt><dd>${v}</dd>`).join('') + '</dl>';
@@ -283,6 +295,10 @@ function renderSummary(m) {
     html += `<details class="meta"><summary>Log metadata (${r.meta.length})</summary><dl class="kv">${r.meta.map(([k, v]) => `<dt>${esc(k)}</dt><dd>${esc(v)}</dd>`).join('')}</dl></details>`;
   }
   $('#summary').innerHTML = html;
+}
+// The method the result was computed with (as the worker's wasm checked it).
+function methodOf(m) {
+  return (m.checkedConfig && m.checkedConfig.method) || (state.config && state.config.method) || 'anfis';
 }
 const FORMAT_NAME = { csv: 'navlog CSV', ulog: 'PX4 ULog', dataflash: 'ArduPilot DataFlash' };
 
@@ -481,7 +497,10 @@ function trackPath(u, si) {
 function renderPlots(m, keepX) {
   destroyPlots();
   const p = m.plot;
-  const thr = state.config.threshold ?? state.ready?.defaults?.threshold ?? 0.5;
+  // ANFIS decides at the configured threshold; every other method's score is
+  // its test statistic over its own threshold, so a fault is f >= 1
+  const method = methodOf(m);
+  const thr = method === 'anfis' ? (m.checkedConfig?.threshold ?? state.config.threshold ?? state.ready?.defaults?.threshold ?? 0.5) : 1;
 
   // (c) status band
   const bandData = pad({ t: p.runs.map((r) => r[0]) }, [p.runs.map((r) => r[2])]);
@@ -510,7 +529,7 @@ function renderPlots(m, keepX) {
     series: [
       { label: 't (s)', value: (u, v) => fmt(v, 2) },
       { label: 'F (-)', scale: 'f', stroke: COLORS.f, width: 1.5, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 3) },
-      { label: `threshold ${thr}`, scale: 'f', stroke: COLORS.thr, width: 1.25, dash: [6, 4], points: { show: false }, value: (u, v) => fmt(v, 2) },
+      { label: method === 'anfis' ? `threshold ${thr}` : `fault at 1 (${method})`, scale: 'f', stroke: COLORS.thr, width: 1.25, dash: [6, 4], points: { show: false }, value: (u, v) => fmt(v, 2) },
     ],
     axes: [tAxis(), yAxis('F (-)', 'f'), spacerAxis()],
   }, fData, $('#plot-f'));
@@ -813,6 +832,13 @@ function init() {
     drop.hidden = true;
     openFile(e.dataTransfer.files[0]);
   });
+
+  compare = initCompare({
+    send,
+    hasLog: () => state.workerHasLog,
+    logName: () => (state.workerHasLog && state.result ? state.result.source.name : null),
+  });
+  state.compare = compare.state;
 
   let rt = 0;
   new ResizeObserver(() => { clearTimeout(rt); rt = setTimeout(resize, 120); }).observe($('.timeplots'));

@@ -4,8 +4,13 @@
 //   {type:'sim', name, seed, config}       simulate + parse + audit
 //   {type:'rerun', config}                 audit the cached log again
 //   {type:'csv'}                           per-sample CSV of the last audit
-// Messages out: ready | progress | result | csv | error (each with the job id).
-import init, { Auditor, readLog, simulate, scenarioNames, Detector, version } from './pkg/navguard.js';
+//   {type:'compare', seeds, methods?, includeLog}  CompareRun over every method
+//   {type:'compare-cancel', target}        stop the compare job `target`
+// Messages out: ready | progress | result | csv | error (each with the job id),
+// compare-progress | compare-result | compare-cancelled (see compare.js).
+// A comparison runs in slices of ~50 ms, so audit messages are served in
+// between (each job keeps its own wasm object).
+import init, { Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, version } from './pkg/navguard.js';
 
 const ready = init();
 let bytes = null;     // Uint8Array of the current log
@@ -35,6 +40,14 @@ self.onmessage = async (ev) => {
       post({ type: 'ready', id, scenarios: scenarioNames(), defaults, version: version() });
       return;
     }
+    if (msg.type === 'compare') {
+      await compare(id, msg);
+      return;
+    }
+    if (msg.type === 'compare-cancel') {
+      cancelled.add(msg.target);
+      return;
+    }
     if (msg.type === 'file') {
       bytes = await readFile(id, msg.file);
       source = { kind: 'file', name: msg.file.name, size: msg.file.size };
@@ -58,16 +71,64 @@ self.onmessage = async (ev) => {
       throw new Error(`unknown message ${msg.type}`);
     }
     const t0 = performance.now();
-    last = await audit(id, msg.config || undefined);
+    const config = msg.config || undefined;
+    // the configuration as the wasm checked it (method, defaults filled in)
+    const d = new Detector(config);
+    const checkedConfig = d.config();
+    d.free();
+    last = await audit(id, config);
     const auditMs = performance.now() - t0;
     progress(id, 'detecting', 1, 'preparing plot data');
     await yieldNow();
     const plot = preparePlots(log, last);
-    post({ type: 'result', id, source, report: last.report, plot, auditMs, logMeta: { format: log.format, rows: log.rows, columns: Object.keys(log.columns) } });
+    post({ type: 'result', id, source, report: last.report, plot, auditMs, checkedConfig, logMeta: { format: log.format, rows: log.rows, columns: Object.keys(log.columns) } });
   } catch (e) {
     post({ type: 'error', id, message: e && e.message ? e.message : String(e) });
   }
 };
+
+// ----------------------------------------------------------- comparison
+
+const cancelled = new Set(); // compare job ids asked to stop
+
+// CompareRun: step() runs one (flight, method) pair (a few ms to a few hundred
+// ms); step for ~50 ms, report the fraction, yield so a cancel can arrive.
+async function compare(id, msg) {
+  const t0 = performance.now();
+  const opts = { seeds: Math.max(1, Math.min(100, Math.floor(Number(msg.seeds) || 3))) };
+  if (Array.isArray(msg.methods) && msg.methods.length) opts.methods = msg.methods;
+  const run = new CompareRun(opts);
+  try {
+    let logName = null;
+    if (msg.includeLog) {
+      if (!bytes || !source) throw new Error('no log is opened to include');
+      run.addLog(source.name, bytes);
+      logName = source.name;
+    }
+    let frac = 0;
+    let steps = 0;
+    post({ type: 'compare-progress', id, frac, steps });
+    await yieldFast();
+    while (frac < 1) {
+      if (cancelled.delete(id)) {
+        post({ type: 'compare-cancelled', id });
+        return;
+      }
+      const s0 = performance.now();
+      do {
+        frac = run.step();
+        steps++;
+      } while (frac < 1 && performance.now() - s0 < 50);
+      post({ type: 'compare-progress', id, frac, steps });
+      await yieldFast();
+    }
+    cancelled.delete(id);
+    const { comparison, markdown } = run.finish();
+    post({ type: 'compare-result', id, comparison, markdown, logName, steps, ms: performance.now() - t0 });
+  } finally {
+    run.free();
+  }
+}
 
 async function readFile(id, file) {
   const total = file.size;
