@@ -641,3 +641,199 @@ test('live session from a log file: file kept in IndexedDB, pause saves, re-open
     await page.close();
   }
 });
+
+// ---------------------------------------------------------- compare methods
+
+// Rust's `{:.d$}` (what the CLI prints): ties to even, "–" for NaN.
+function rustFixed(x, d) {
+  if (!Number.isFinite(x)) return '–';
+  const long = x.toFixed(d + 25);
+  if (long.endsWith('5' + '0'.repeat(24))) {
+    let t = long.slice(0, long.length - 25);
+    if (t.endsWith('.')) t = t.slice(0, -1);
+    if (Number(t[t.length - 1]) % 2 === 0) return t;
+  }
+  return x.toFixed(d);
+}
+
+async function runCompare(page, seeds) {
+  await page.fill('#compare-seeds', String(seeds));
+  await page.click('#compare-run');
+  await page.waitForFunction(() => {
+    const c = window.navguard.compare;
+    return c && !c.running && (c.result || /failed|cancelled|interrupted/.test(c.status));
+  }, null, { timeout: 180000 });
+  const status = await page.evaluate(() => window.navguard.compare.status);
+  assert.match(status, /^100 % · done in/, `comparison did not finish: ${status}`);
+}
+
+test('compare methods: all 8 methods over seed 1, progress to 100 %, tables match a direct CompareRun', async () => {
+  const { page, errors } = await openPage();
+  try {
+    assert.equal(await page.$eval('#compare-seeds', (e) => e.value), '3');
+    await runCompare(page, 1);
+
+    // a real progress bar: several slices, increasing, ending at 1
+    const prog = await page.evaluate(() => window.navguard.compare.progressLog);
+    assert.ok(prog.length >= 3, `expected several progress messages: ${JSON.stringify(prog)}`);
+    assert.equal(prog[0].frac, 0);
+    assert.equal(prog[prog.length - 1].frac, 1);
+    for (let i = 1; i < prog.length; i++) assert.ok(prog[i].frac > prog[i - 1].frac, `progress went backwards: ${JSON.stringify(prog)}`);
+    assert.equal(await page.$eval('#compare-bar', (b) => b.value), 1);
+    assert.match(await page.textContent('#compare-detail'), /^100 %/);
+
+    // (a) one row per method, best F2 highlighted
+    const rows = await page.$$eval('#compare-methods tbody tr', (trs) => trs.map((tr) => ({
+      method: tr.dataset.method,
+      best: tr.classList.contains('best'),
+      cells: Array.from(tr.querySelectorAll('td.num')).map((td) => td.textContent),
+    })));
+    assert.deepEqual(rows.map((r) => r.method), ['anfis', 'chi2', 'nis', 'gate', 'mahalanobis', 'rms', 'knee', 'adaptive']);
+    for (const r of rows) {
+      assert.equal(r.cells.length, 6);
+      for (const c of r.cells.slice(0, 4)) assert.match(c, /^(\d\.\d{4}|–)$/, `${r.method}: ${c}`);
+      assert.match(r.cells[4], /^(\d+\.\d|–)$/);
+      assert.match(r.cells[5], /^(\d+\.\d\d%|–%)$/);
+    }
+    const f2s = rows.map((r) => Number(r.cells[3]));
+    const bestRows = rows.filter((r) => r.best);
+    assert.ok(bestRows.length >= 1);
+    for (const b of bestRows) assert.equal(Number(b.cells[3]), Math.max(...f2s.filter(Number.isFinite)));
+
+    // (b) fault kinds × methods
+    const kinds = await page.$$eval('#compare-kinds tbody tr', (trs) => trs.map((tr) => [tr.dataset.kind, ...Array.from(tr.querySelectorAll('td.num')).map((td) => td.textContent)]));
+    assert.ok(kinds.length >= 5, JSON.stringify(kinds));
+    assert.ok(kinds.some((k) => k[0] === 'step') && kinds.some((k) => k[0] === 'outage'), JSON.stringify(kinds));
+    for (const k of kinds) {
+      assert.equal(k.length, 9);
+      for (const c of k.slice(1)) assert.match(c, /^\d+\/\d+ · (\d+\.\d|–)$/, `${k[0]}: ${c}`);
+    }
+    // no real log added: no (c) table
+    assert.equal(await page.$('#compare-logs'), null);
+
+    // the same CompareRun, directly in the page with the same pkg
+    const direct = await page.evaluate(async () => {
+      const m = await import('./pkg/navguard.js');
+      await m.default();
+      const run = new m.CompareRun({ seeds: 1 });
+      let n = 0;
+      while (run.step() < 1 && n < 100000) n++;
+      const out = run.finish();
+      run.free();
+      const a = out.comparison.methods.find((x) => x.method === 'anfis');
+      return { f2: a.metrics.f2, accuracy: a.metrics.accuracy, methods: out.comparison.methods.length, markdown: out.markdown };
+    });
+    assert.equal(direct.methods, 8);
+    const anfis = rows.find((r) => r.method === 'anfis');
+    assert.equal(anfis.cells[3], rustFixed(direct.f2, 4), `anfis F2 shown ${anfis.cells[3]}, direct ${direct.f2}`);
+    assert.equal(anfis.cells[0], rustFixed(direct.accuracy, 4));
+    // and exactly what the CLI's Markdown (built in Rust) prints for that row
+    const mdRow = direct.markdown.split('\n').find((l) => /^\| (\*\*)?anfis(\*\*)? \|/.test(l));
+    assert.ok(mdRow, direct.markdown);
+    assert.equal(mdRow.split('|')[5].trim(), anfis.cells[3]);
+    // the worker's Markdown equals the direct one, and Copy Markdown copies it
+    const md = await page.evaluate(() => window.navguard.compare.markdown);
+    assert.equal(md, direct.markdown);
+    assert.equal(await page.$eval('#compare-md', (e) => e.textContent), direct.markdown);
+    await page.context().grantPermissions(['clipboard-read', 'clipboard-write'], { origin: base.replace(/\/$/, '') });
+    await page.click('#compare-copy');
+    await page.waitForFunction(() => document.querySelector('#compare-copy-state').textContent !== '', null, { timeout: 5000 });
+    assert.equal(await page.textContent('#compare-copy-state'), 'copied');
+    const clip = await page.evaluate(() => navigator.clipboard.readText().catch((e) => `unreadable: ${e.message}`));
+    if (!clip.startsWith('unreadable')) assert.equal(clip, direct.markdown);
+
+    await page.screenshot({ path: join(artifacts, 'page-compare.png'), fullPage: true });
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+test('compare methods: a subset of methods with the opened log adds the real-log table; cancel keeps the worker', async () => {
+  const { page, errors } = await openPage();
+  try {
+    assert.equal(await page.$eval('#compare-log', (e) => e.disabled), true);
+    // a 60 s GPS-only CSV, opened (and audited) through the file input
+    const lines = ['t,lat,lon,alt,vn,ve,vd,fix,sats,eph'];
+    for (let i = 0; i <= 600; i++) {
+      const t = i * 0.1;
+      lines.push(`${t.toFixed(1)},${(31.94 + (5 * t) / 111320).toFixed(9)},118.79,50,5,0,0,3,11,0.9`);
+    }
+    await page.setInputFiles('#file', { name: 'mine.csv', mimeType: 'text/csv', buffer: Buffer.from(lines.join('\n') + '\n') });
+    await waitDone(page);
+    assert.equal(await page.$eval('#compare-log', (e) => e.disabled), false);
+    assert.match(await page.textContent('#compare-log-name'), /mine\.csv/);
+
+    // cancel a 10-seed run once it has started: the worker (and its log) stay
+    await page.fill('#compare-seeds', '10');
+    await page.click('#compare-run');
+    await page.waitForFunction(() => window.navguard.compare.progressLog.some((p) => p.frac > 0), null, { timeout: 60000 });
+    await page.click('#compare-cancel');
+    await page.waitForFunction(() => !window.navguard.compare.running, null, { timeout: 30000 });
+    assert.equal(await page.evaluate(() => window.navguard.compare.status), 'cancelled');
+    assert.equal(await page.evaluate(() => window.navguard.compare.result), null);
+    assert.equal(await page.evaluate(() => window.navguard.workerHasLog), true);
+
+    // two methods, the opened log included
+    for (const m of ['nis', 'gate', 'mahalanobis', 'rms', 'knee', 'adaptive']) await page.uncheck(`#compare-method-list input[value="${m}"]`);
+    await page.check('#compare-log');
+    await runCompare(page, 1);
+    const methods = await page.$$eval('#compare-methods tbody tr', (trs) => trs.map((tr) => tr.dataset.method));
+    assert.deepEqual(methods, ['anfis', 'chi2']);
+    const logs = await page.$$eval('#compare-logs tbody tr', (trs) => trs.map((tr) => Array.from(tr.cells).map((td) => td.textContent)));
+    assert.equal(logs.length, 1);
+    assert.match(logs[0][0], /^mine\.csv \(\d+ epochs\)$/);
+    for (const c of logs[0].slice(1)) assert.match(c, /^\d+\.\d\d%$/);
+    assert.match(await page.evaluate(() => window.navguard.compare.markdown), /Real logs \(no labels\)[\s\S]*\| mine\.csv \(\d+ epochs\) \|/);
+    // nothing disabled with no method ticked
+    await page.uncheck('#compare-method-list input[value="anfis"]');
+    await page.uncheck('#compare-method-list input[value="chi2"]');
+    assert.equal(await page.$eval('#compare-run', (b) => b.disabled), true);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+test('detector config: method chi2 reaches the worker and changes the audit; Defaults restores anfis', async () => {
+  const { page, errors } = await openPage();
+  try {
+    assert.equal(await page.$eval('#config [name=method]', (e) => e.value), 'anfis');
+    await page.selectOption('#scenario', 'paper');
+    await page.fill('#seed', '1');
+    await page.click('#sim-run');
+    await waitDone(page);
+    const snap = () => page.evaluate(() => {
+      const m = window.navguard.result;
+      return { method: m.checkedConfig.method, metrics: m.report.metrics, flagged: m.report.flaggedGpsEpochFraction, retrains: m.report.stats.retrains, faults: m.report.faults.length };
+    });
+    const a = await snap();
+    assert.equal(a.method, 'anfis');
+    assert.match(await page.textContent('#summary'), /Method\s*anfis/);
+
+    // choosing chi2 reruns the audit with it
+    let renders = await page.evaluate(() => window.navguard.renders);
+    await page.selectOption('#config [name=method]', 'chi2');
+    await page.waitForFunction((n) => window.navguard.renders > n && document.body.dataset.state === 'done', renders, { timeout: 60000 });
+    assert.equal((await page.evaluate(() => window.navguard.config)).method, 'chi2');
+    const b = await snap();
+    assert.equal(b.method, 'chi2', 'the worker did not audit with chi2');
+    assert.match(await page.textContent('#summary'), /Method\s*chi2/);
+    assert.notDeepEqual(b.metrics, a.metrics, 'chi2 and anfis gave identical metrics');
+    assert.ok(b.metrics.tp !== a.metrics.tp || b.metrics.fp !== a.metrics.fp, `tp/fp unchanged: ${JSON.stringify([a.metrics, b.metrics])}`);
+    // chi2 decides at score 1: the F plot's decision line says so
+    assert.match(await page.textContent('#plot-f .u-legend'), /fault at 1 \(chi2\)/);
+
+    // Defaults puts anfis back and reruns
+    renders = await page.evaluate(() => window.navguard.renders);
+    await page.click('#config-reset');
+    await page.waitForFunction((n) => window.navguard.renders > n && document.body.dataset.state === 'done', renders, { timeout: 60000 });
+    assert.equal(await page.$eval('#config [name=method]', (e) => e.value), 'anfis');
+    const c = await snap();
+    assert.equal(c.method, 'anfis');
+    assert.deepEqual(c.metrics, a.metrics);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
