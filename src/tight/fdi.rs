@@ -415,7 +415,11 @@ impl Reconfigurator {
                             Some(r) => {
                                 let mut l = lin.clone();
                                 l.v[d.index] = r.pr - lin.predicted[d.index];
-                                l.r[(d.index, d.index)] = r.variance;
+                                // The filter-prediction predictor carries no
+                                // information beyond the filter's, so the
+                                // predicted-range variance H P Hᵀ is added to
+                                // the predictor's own: less false confidence.
+                                l.r[(d.index, d.index)] = r.variance + (pv[(d.index, d.index)] - lin.r[(d.index, d.index)]).max(0.0);
                                 (l, Action::Reconstruct)
                             }
                             None => (lin.without(d.index), Action::Isolate),
