@@ -681,6 +681,7 @@ test('compare methods: all 8 methods over seed 1, progress to 100 %, tables matc
     for (let i = 1; i < prog.length; i++) assert.ok(prog[i].frac > prog[i - 1].frac, `progress went backwards: ${JSON.stringify(prog)}`);
     assert.equal(await page.$eval('#compare-bar', (b) => b.value), 1);
     assert.match(await page.textContent('#compare-detail'), /^100 %/);
+    assert.equal(await page.$eval('#compare-cancel', (b) => getComputedStyle(b).display), 'none', 'Cancel still shown after the run');
 
     // (a) one row per method, best F2 highlighted
     const rows = await page.$$eval('#compare-methods tbody tr', (trs) => trs.map((tr) => ({
@@ -768,6 +769,7 @@ test('compare methods: a subset of methods with the opened log adds the real-log
     await page.fill('#compare-seeds', '10');
     await page.click('#compare-run');
     await page.waitForFunction(() => window.navguard.compare.progressLog.some((p) => p.frac > 0), null, { timeout: 60000 });
+    assert.notEqual(await page.$eval('#compare-cancel', (b) => getComputedStyle(b).display), 'none', 'no Cancel button while running');
     await page.click('#compare-cancel');
     await page.waitForFunction(() => !window.navguard.compare.running, null, { timeout: 30000 });
     assert.equal(await page.evaluate(() => window.navguard.compare.status), 'cancelled');
