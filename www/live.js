@@ -501,7 +501,9 @@ function draw() {
   const u = L.plot;
   if (!u || $('#live-panel').hidden) return;
   const b = L.buf;
-  const thr = L.config && Number.isFinite(L.config.threshold) ? L.config.threshold : 0.5;
+  // Methods other than anfis score their test statistic over its threshold: a fault at 1.
+  const anfis = !L.config || !L.config.method || L.config.method === 'anfis';
+  const thr = !anfis ? 1 : L.config && Number.isFinite(L.config.threshold) ? L.config.threshold : 0.5;
   u.setData([b.t.slice(), b.f.slice(), b.t.map(() => thr), b.r.slice(), b.c.slice()]);
   L.draws = (L.draws || 0) + 1;
 }
