@@ -567,6 +567,77 @@ mod tests {
         assert_relative_eq!(dx_info, (1.0 + 0.5 / 2.5) / 2.4, epsilon = 1e-12);
     }
 
+    fn sky() -> (TcEkf, Vec<PrMeas>) {
+        use crate::tight::tc_ekf::{EkfConfig, NavState};
+        use nalgebra::{UnitQuaternion, Vector3};
+        let x = NavState {
+            q: UnitQuaternion::identity(),
+            v: Vector3::zeros(),
+            p: Vector3::zeros(),
+            bg: Vector3::zeros(),
+            ba: Vector3::zeros(),
+            clk: 0.0,
+            drift: 0.0,
+        };
+        let ekf = TcEkf::new(x, EkfConfig::default()).unwrap();
+        let dirs = [(0.0, 0.0, -1.0), (0.8, 0.0, -0.6), (-0.4, 0.7, -0.6), (-0.4, -0.7, -0.6), (0.0, 0.9, -0.44), (0.6, -0.6, -0.53)];
+        let meas = dirs
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                let sat = Vector3::new(d.0, d.1, d.2).normalize() * 2.2e7;
+                PrMeas { prn: i as u8 + 1, pr: sat.norm(), sat }
+            })
+            .collect();
+        (ekf, meas)
+    }
+
+    #[test]
+    fn reconfigurator_actions() {
+        let (ekf0, clean) = sky();
+        let mut faulty = clean.clone();
+        faulty[2].pr += 60.0; // PRN 3
+        let run = |strategy: Strategy, eta: f64| {
+            let mut ekf = ekf0.clone();
+            let mut r = Reconfigurator::new(FdsrConfig { strategy, alpha: 0.001, eta }, Box::new(FilterPredictor::new(9.0))).unwrap();
+            let d0 = r.epoch(&mut ekf, &clean, 0.0);
+            assert_eq!(d0.detection, None);
+            assert_eq!(d0.action, Action::UpdateAll);
+            let d1 = r.epoch(&mut ekf, &faulty, 1.0);
+            (d1, r, ekf)
+        };
+        // No detection: everything is used, and the 60 m moves the estimate.
+        let (d, _, e) = run(Strategy::None, 0.1);
+        assert_eq!((d.detection, d.action), (None, Action::UpdateAll));
+        assert!(d.lambda_max > 3.29);
+        assert!(e.x.p.norm() > 1.0, "{}", e.x.p);
+        // FDI names PRN 3 and isolates it: the estimate barely moves.
+        let (d, _, e) = run(Strategy::Fdi, 0.1);
+        assert_eq!(d.detection.map(|x| x.prn), Some(3));
+        assert_eq!(d.action, Action::Isolate);
+        assert!(d.rdpop.is_some_and(|r| r > 0.0));
+        assert!(e.x.p.norm() < 0.5, "{}", e.x.p);
+        // FDA adapts it; the adapted innovation is consistent, so the estimate
+        // also stays put.
+        let (d, _, e) = run(Strategy::Fda, 0.1);
+        assert_eq!((d.detection.map(|x| x.prn), d.action), (Some(3), Action::Adapt));
+        assert!(e.x.p.norm() < 0.5, "{}", e.x.p);
+        // Switch: η below the RDPOP reconstructs, η above isolates.
+        let (d, r, e) = run(Strategy::Switch, 0.0);
+        assert_eq!((d.detection.map(|x| x.prn), d.action), (Some(3), Action::Reconstruct));
+        assert!(r.under_repair.contains_key(&3));
+        assert!(e.x.p.norm() < 0.5, "{}", e.x.p);
+        let (d, mut r, mut e) = run(Strategy::Switch, 1.0e9);
+        assert_eq!(d.action, Action::Isolate);
+        // Still faulty next epoch: kept under repair by the predictor test.
+        let d2 = r.epoch(&mut e, &faulty, 2.0);
+        assert_eq!(d2.detection.map(|x| x.prn), Some(3));
+        // Healthy again: released.
+        let d3 = r.epoch(&mut e, &clean, 3.0);
+        assert_eq!(d3.detection, None);
+        assert!(r.under_repair.is_empty());
+    }
+
     #[test]
     fn filter_predictor_eq12() {
         let mut fp = FilterPredictor::new(9.0);
