@@ -134,3 +134,33 @@ fn streaming_detector_names_the_faulty_satellite_from_csv() {
     let js = serde_json::to_string(&out[out.len() - 1]).unwrap();
     assert!(js.contains("\"status\""), "{js}");
 }
+
+/// Table 5 in good geometry: ramps are flagged late, slower ramps later.
+#[test]
+fn gradual_faults_are_detected_late_in_good_geometry() {
+    let (cfg, world, envs) = setup();
+    let env = &envs[0];
+    let mean_delay = |kind: FaultType| {
+        let fault = FaultSpec { prn: env.faulty_prn, kind, start: 300.0, end: 360.0 };
+        let d: Vec<f64> = SEEDS
+            .iter()
+            .map(|&seed| {
+                let spec = RunSpec {
+                    world: &world,
+                    cfg: &cfg,
+                    prns: &env.prns,
+                    watch_prn: env.faulty_prn,
+                    fault: Some(fault),
+                    fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
+                    seed,
+                };
+                run(&spec).unwrap().detection_delay(env.faulty_prn, 300.0, 360.0).unwrap_or(60.0)
+            })
+            .collect();
+        d.iter().sum::<f64>() / d.len() as f64
+    };
+    let (d1, d05, d03) = (mean_delay(FaultType::Ramp1), mean_delay(FaultType::Ramp05), mean_delay(FaultType::Ramp03));
+    assert!(d1 >= 5.0 && d1 <= 25.0, "1 m/s ramp delay {d1}");
+    assert!(d05 > d1 && d03 > d05, "delays {d1} {d05} {d03}");
+    assert!(d03 < 60.0, "0.3 m/s ramp never detected");
+}
