@@ -259,7 +259,7 @@ impl TightDetector {
                 }
             }
             self.last_t = Some(row.t);
-            let mut out = EpochOutput {
+            let out = EpochOutput {
                 t: row.t,
                 status: Status::Initializing,
                 faulty_prn: None,
@@ -272,7 +272,6 @@ impl TightDetector {
                 velocity_ned: [f64::NAN; 3],
                 clock_bias_m: f64::NAN,
             };
-            out.n_sats = meas.len();
             return Ok(out);
         };
         let dt = row.t - self.last_t.unwrap_or(row.t);
