@@ -542,6 +542,89 @@ impl CompareRun {
     }
 }
 
+/// The tightly coupled GNSS/INS detector of Shen et al. 2022 (see
+/// `docs/tight.md`): one row per epoch `{ t, gyro: [x,y,z], accel: [x,y,z],
+/// pr: [{ prn, pr }] }` (IMU-only rows have `pr: []`); each output names the
+/// faulty satellite, if any.
+#[wasm_bindgen(js_name = TightDetector)]
+pub struct TightDetectorJs {
+    inner: crate::tight::stream::TightDetector,
+}
+
+#[wasm_bindgen(js_class = TightDetector)]
+impl TightDetectorJs {
+    /// `new TightDetector(config)`: every field optional (see `docs/tight.md`).
+    #[wasm_bindgen(constructor)]
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue) -> Result<TightDetectorJs, JsError> {
+        let cfg: crate::tight::stream::TightConfig = if config.is_undefined() || config.is_null() {
+            Default::default()
+        } else {
+            serde_wasm_bindgen::from_value(config).map_err(|e| err(format!("tight config: {e}")))?
+        };
+        Ok(TightDetectorJs { inner: crate::tight::stream::TightDetector::new(cfg).map_err(err)? })
+    }
+
+    /// One epoch row; returns `{ t, status, faulty_prn, statistic, lambda_max, rdpop, action, n_sats, position_ned, ... }`.
+    pub fn push(&mut self, #[wasm_bindgen(unchecked_param_type = "object")] row: JsValue) -> Result<JsValue, JsError> {
+        let row: crate::tight::stream::EpochRow = serde_wasm_bindgen::from_value(row).map_err(|e| err(format!("tight row: {e}")))?;
+        let out = self.inner.push(&row).map_err(err)?;
+        serde_wasm_bindgen::to_value(&out).map_err(err)
+    }
+
+    /// Every row of a pseudo-range CSV (`pr_<prn>` or `sat_id` layout); an array of outputs.
+    #[wasm_bindgen(js_name = pushCsv)]
+    pub fn push_csv(&mut self, text: &str) -> Result<JsValue, JsError> {
+        let rows = crate::tight::stream::parse_csv(text).map_err(err)?;
+        let out = self.inner.run(&rows).map_err(err)?;
+        serde_wasm_bindgen::to_value(&out).map_err(err)
+    }
+}
+
+/// A simulated tightly coupled flight: environment `env` (1–5, the paper's
+/// Table 3 plus Env 5), fault type 1–5 (Table 4; 0 = none), seed. Returns
+/// `{ csv, config, faultyPrn, faultStart, faultEnd }`: feed `csv` to a
+/// `new TightDetector(config)`.
+#[wasm_bindgen(js_name = tightSimulate)]
+pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, JsError> {
+    use crate::tight::fdi::{FdsrConfig, Strategy};
+    use crate::tight::scenario::{environments, run_with_rows, FaultSpec, FaultType, RunSpec, SimConfig, World};
+    let cfg = SimConfig::default();
+    let world = World::new(&cfg).map_err(err)?;
+    let envs = environments(&world, &cfg).map_err(err)?;
+    let e = envs.get((env as usize).wrapping_sub(1)).ok_or_else(|| err(format!("tightSimulate: env must be 1..={}, got {env}", envs.len())))?;
+    let kind = match fault_type {
+        0 => None,
+        1 => Some(FaultType::Step20),
+        2 => Some(FaultType::Step10),
+        3 => Some(FaultType::Ramp1),
+        4 => Some(FaultType::Ramp05),
+        5 => Some(FaultType::Ramp03),
+        k => return Err(err(format!("tightSimulate: fault type must be 0..=5, got {k}"))),
+    };
+    if !(seed.is_finite() && seed >= 0.0) {
+        return Err(err(format!("tightSimulate: seed must be a non-negative number, got {seed}")));
+    }
+    let fault = kind.map(|kind| FaultSpec { prn: e.faulty_prn, kind, start: e.fault_start, end: e.fault_end });
+    let spec = RunSpec {
+        world: &world,
+        cfg: &cfg,
+        prns: &e.prns,
+        watch_prn: e.faulty_prn,
+        fault,
+        fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
+        seed: seed as u64,
+    };
+    let (_, rows, init) = run_with_rows(&spec).map_err(err)?;
+    let tc = crate::tight::stream::TightConfig { t0: world.t0, strategy: Strategy::Fdi, initial: Some(init), ..Default::default() };
+    let out = Object::new();
+    set(&out, "csv", &crate::tight::stream::to_csv(&rows).into());
+    set(&out, "config", &serde_wasm_bindgen::to_value(&tc).map_err(err)?);
+    set(&out, "faultyPrn", &JsValue::from(e.faulty_prn));
+    set(&out, "faultStart", &JsValue::from(e.fault_start));
+    set(&out, "faultEnd", &JsValue::from(e.fault_end));
+    Ok(out.into())
+}
+
 /// Parse a log into columns (for plotting): `{ format, columns: {name: Float64Array}, warnings, missing, meta }`.
 #[wasm_bindgen(js_name = readLog, unchecked_return_type = "LogColumns")]
 pub fn read_log(bytes: &[u8]) -> Result<JsValue, JsError> {
