@@ -5,6 +5,7 @@
 import uPlot from './vendor/uPlot.esm.js';
 import { initLive } from './live.js';
 import { initCompare } from './compare.js';
+import { initTight } from './tight.js';
 
 const $ = (sel) => document.querySelector(sel);
 const STAGES = ['reading', 'parsing', 'detecting', 'plotting'];
@@ -68,10 +69,12 @@ function startWorker() {
     compare.workerRestarted();
     compare.refresh();
   }
+  if (tight) tight.workerRestarted();
   return w;
 }
 
 let compare = null; // the "Compare methods" panel (compare.js)
+let tight = null;   // the "Tightly coupled" panel (tight.js)
 let nextId = 1;
 function send(msg) {
   const id = nextId++;
@@ -114,6 +117,7 @@ function onWorkerMessage(m) {
     return;
   }
   if (compare && compare.onMessage(m)) return;
+  if (tight && tight.onMessage(m)) return;
   if (m.id !== state.job) return; // stale
   if (m.type === 'progress') {
     showProgress(m.stage, m.frac, m.detail);
@@ -839,6 +843,8 @@ function init() {
     logName: () => (state.workerHasLog && state.result ? state.result.source.name : null),
   });
   state.compare = compare.state;
+  tight = initTight({ send });
+  state.tight = tight.state;
 
   let rt = 0;
   new ResizeObserver(() => { clearTimeout(rt); rt = setTimeout(resize, 120); }).observe($('.timeplots'));

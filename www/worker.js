@@ -6,11 +6,13 @@
 //   {type:'csv'}                           per-sample CSV of the last audit
 //   {type:'compare', seeds, methods?, includeLog}  CompareRun over every method
 //   {type:'compare-cancel', target}        stop the compare job `target`
+//   {type:'tight', env, faultType, seed, strategy?}  tightSimulate + TightDetector
 // Messages out: ready | progress | result | csv | error (each with the job id),
-// compare-progress | compare-result | compare-cancelled (see compare.js).
+// compare-progress | compare-result | compare-cancelled (see compare.js),
+// tight-result (see tight.js).
 // A comparison runs in slices of ~50 ms, so audit messages are served in
 // between (each job keeps its own wasm object).
-import init, { Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, version } from './pkg/navguard.js';
+import init, { Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, version } from './pkg/navguard.js';
 
 const ready = init();
 let bytes = null;     // Uint8Array of the current log
@@ -46,6 +48,10 @@ self.onmessage = async (ev) => {
     }
     if (msg.type === 'compare-cancel') {
       cancelled.add(msg.target);
+      return;
+    }
+    if (msg.type === 'tight') {
+      post(tight(id, msg));
       return;
     }
     if (msg.type === 'file') {
@@ -128,6 +134,55 @@ async function compare(id, msg) {
   } finally {
     run.free();
   }
+}
+
+// ------------------------------------------------- tightly coupled GNSS/INS
+
+const TIGHT_STRATEGIES = ['none', 'fdi', 'fda', 'switch'];
+
+// One simulated flight of docs/tight.md through a TightDetector (under a
+// second of work, so in one go). Returns the GNSS epochs only (IMU-only rows
+// carry no test), as plain arrays (null = not defined at that epoch).
+function tight(id, msg) {
+  const t0 = performance.now();
+  const env = Math.floor(Number(msg.env));
+  const faultType = Math.floor(Number(msg.faultType));
+  const seed = Math.max(0, Math.floor(Number(msg.seed) || 0));
+  if (!(env >= 1 && env <= 5)) throw new Error(`environment must be 1..5, got ${msg.env}`);
+  if (!(faultType >= 0 && faultType <= 5)) throw new Error(`fault type must be 0..5, got ${msg.faultType}`);
+  const sim = tightSimulate(env, faultType, seed);
+  const config = { ...sim.config };
+  if (msg.strategy) {
+    if (!TIGHT_STRATEGIES.includes(msg.strategy)) throw new Error(`unknown strategy ${msg.strategy}`);
+    config.strategy = msg.strategy;
+  }
+  const det = new TightDetector(config);
+  let out;
+  try {
+    out = det.pushCsv(sim.csv);
+  } finally {
+    det.free();
+  }
+  const ep = { t: [], status: [], prn: [], lambda: [], statistic: [], rdpop: [], action: [], nSats: [] };
+  const val = (x) => (typeof x === 'number' && Number.isFinite(x) ? x : null);
+  for (const o of out) {
+    if (o.status === 'no-gnss') continue;
+    ep.t.push(o.t);
+    ep.status.push(o.status);
+    ep.prn.push(o.faulty_prn ?? null);
+    ep.lambda.push(val(o.lambda_max));
+    ep.statistic.push(val(o.statistic));
+    ep.rdpop.push(val(o.rdpop));
+    ep.action.push(o.action ?? null);
+    ep.nSats.push(o.n_sats ?? null);
+  }
+  return {
+    type: 'tight-result', id, env, faultType, seed,
+    strategy: config.strategy, alpha: config.alpha, eta: config.eta,
+    faultyPrn: sim.faultyPrn, faultStart: sim.faultStart, faultEnd: sim.faultEnd,
+    rows: out.length, tEnd: out.length ? out[out.length - 1].t : 0,
+    epochs: ep, ms: performance.now() - t0,
+  };
 }
 
 async function readFile(id, file) {

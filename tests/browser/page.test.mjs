@@ -839,3 +839,59 @@ test('detector config: method chi2 reaches the worker and changes the audit; Def
     await page.close();
   }
 });
+
+// ------------------------------------------------- tightly coupled GNSS/INS
+
+test('tightly coupled panel: Env 1, 20 m step, seed 7 names the injected satellite at once; navguard-tight figures load', async () => {
+  const { page, errors } = await openPage();
+  try {
+    await page.selectOption('#tight-env', '1');
+    await page.selectOption('#tight-type', '1');
+    await page.fill('#tight-seed', '7');
+    await page.click('#tight-run');
+    await page.waitForFunction(() => {
+      const t = window.navguard.tight;
+      return t && !t.running && (t.result || /failed|interrupted/.test(t.status));
+    }, null, { timeout: 60000 });
+    const status = await page.evaluate(() => window.navguard.tight.status);
+    assert.match(status, /^done in/, `tight run did not finish: ${status}`);
+
+    // the same simulation, directly in the page with the same pkg
+    const direct = await page.evaluate(async () => {
+      const m = await import('./pkg/navguard.js');
+      await m.default();
+      const s = m.tightSimulate(1, 1, 7);
+      return { faultyPrn: s.faultyPrn, faultStart: s.faultStart, faultEnd: s.faultEnd };
+    });
+    assert.ok(Number.isInteger(direct.faultyPrn), JSON.stringify(direct));
+    const prnCell = await page.textContent('#tight-table tr[data-key="prn"] td');
+    assert.match(prnCell, new RegExp(`^G${direct.faultyPrn} vs G${direct.faultyPrn} ✓$`), `named satellite: ${prnCell}`);
+    assert.equal(await page.$eval('#tight-table tr[data-key="prn"] [data-ok]', (e) => e.dataset.ok), 'true');
+    assert.equal(await page.textContent('#tight-table tr[data-key="delay"] td'), '0.0 s');
+    assert.equal(await page.textContent('#tight-table tr[data-key="first"] td'), `${direct.faultStart.toFixed(1)} s`);
+    assert.equal(await page.textContent('#tight-table tr[data-key="before"] td'), '0');
+    assert.match(await page.textContent('#tight-table tr[data-key="share"] td'), /^\d+\/\d+ \(\d+\.\d %\)$/);
+    const sum = await page.evaluate(() => ({ ...window.navguard.tight.summary, faultStart: window.navguard.tight.result.faultStart }));
+    assert.equal(sum.faultStart, direct.faultStart);
+    assert.ok(sum.sectionShare > 0.5, JSON.stringify(sum));
+
+    // the statistic plot: a canvas, |λ| against T1 = 3.291 (α 0.001)
+    const sizes = await page.$$eval('#tight-plot-lambda .uplot canvas, #tight-plot-rdpop .uplot canvas', (cs) => cs.map((c) => [c.width, c.height]));
+    assert.equal(sizes.length, 2, 'expected the |λ| and RDPOP plots');
+    for (const [w, h] of sizes) assert.ok(w > 0 && h > 0, `canvas has zero size: ${w}x${h}`);
+    assert.match(await page.textContent('#tight-plot-lambda .u-legend'), /T1 = 3\.291/);
+    assert.ok(await page.evaluate(() => window.navguard.tight.t1 > 3.29 && window.navguard.tight.t1 < 3.292));
+
+    // the four navguard-tight figures
+    await page.waitForFunction(() => Array.from(document.querySelectorAll('#tight-figs img')).every((i) => i.complete), null, { timeout: 10000 });
+    const imgs = await page.$$eval('#tight-figs img', (is) => is.map((i) => [i.getAttribute('src'), i.naturalWidth]));
+    assert.deepEqual(imgs.map((i) => i[0]), ['figures/tight_fig7_rdpop.svg', 'figures/tight_fig8_env_errors.svg', 'figures/tight_fig11_fault_types.svg', 'figures/tight_fig12_relative_error.svg']);
+    for (const [src, w] of imgs) assert.ok(w > 0, `${src} did not load (naturalWidth ${w})`);
+
+    await page.$eval('#tight-panel', (e) => e.scrollIntoView());
+    await page.screenshot({ path: join(artifacts, 'page-tight.png'), fullPage: true });
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
