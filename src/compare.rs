@@ -248,15 +248,12 @@ impl CompareRun {
             let (name, log) = &self.logs[item - self.cases.len()];
             let out = run(cfg, &log.samples)?;
             let (mut epochs, mut flagged) = (0u64, 0u64);
-            let mut det_epochs = 0;
             for (s, o) in log.samples.iter().zip(&out) {
                 if s.has_fix() {
-                    det_epochs += 1;
                     epochs += 1;
                     flagged += *o as u64;
                 }
             }
-            let _ = det_epochs;
             self.acc[mi].logs.push(LogResult {
                 name: name.clone(),
                 gps_epochs: epochs,
@@ -322,6 +319,19 @@ fn f(x: f64, d: usize) -> String {
     if x.is_finite() { format!("{x:.d$}") } else { "–".into() }
 }
 
+/// A table header with one column per method.
+fn method_header(s: &mut String, first: &str, c: &Comparison) {
+    s.push_str(&format!("| {first} |"));
+    for m in &c.methods {
+        s.push_str(&format!(" {} |", m.method));
+    }
+    s.push_str("\n|---|");
+    for _ in &c.methods {
+        s.push_str("---|");
+    }
+    s.push('\n');
+}
+
 /// The comparison as Markdown tables (what the README shows).
 pub fn markdown(c: &Comparison) -> String {
     let mut s = String::new();
@@ -345,15 +355,8 @@ pub fn markdown(c: &Comparison) -> String {
             f(100.0 * m.clean_flagged_fraction, 2)
         ));
     }
-    s.push_str("\nFaults caught (of injected) and median detection delay, s, per fault kind:\n\n| kind |");
-    for m in &c.methods {
-        s.push_str(&format!(" {} |", m.method));
-    }
-    s.push_str("\n|---|");
-    for _ in &c.methods {
-        s.push_str("---|");
-    }
-    s.push('\n');
+    s.push_str("\nFaults caught (of injected) and median detection delay, s, per fault kind:\n\n");
+    method_header(&mut s, "kind", c);
     if let Some(first) = c.methods.first() {
         for (k, kr) in first.kinds.iter().enumerate() {
             s.push_str(&format!("| {} |", kr.group));
@@ -366,15 +369,8 @@ pub fn markdown(c: &Comparison) -> String {
             s.push('\n');
         }
         if !first.logs.is_empty() {
-            s.push_str("\nReal logs (no labels): share of GPS epochs flagged:\n\n| log |");
-            for m in &c.methods {
-                s.push_str(&format!(" {} |", m.method));
-            }
-            s.push_str("\n|---|");
-            for _ in &c.methods {
-                s.push_str("---|");
-            }
-            s.push('\n');
+            s.push_str("\nReal logs (no labels): share of GPS epochs flagged:\n\n");
+            method_header(&mut s, "log", c);
             for (k, lr) in first.logs.iter().enumerate() {
                 s.push_str(&format!("| {} ({} epochs) |", lr.name, lr.gps_epochs));
                 for m in &c.methods {

@@ -227,6 +227,16 @@ impl MahaWindow {
         Ok(())
     }
 
+    /// Add (`sign` 1) or remove (−1) one Δr from the running sums.
+    fn accumulate(&mut self, x: &[f64; 3], sign: f64) {
+        for (s, v) in self.sum.iter_mut().zip(x) {
+            *s += sign * v;
+        }
+        for (s, v) in self.sq.iter_mut().zip(outer(x)) {
+            *s += sign * v;
+        }
+    }
+
     /// Add a normal epoch's Δr.
     pub fn push(&mut self, x: [f64; 3]) {
         if !x.iter().all(|v| v.is_finite()) {
@@ -235,38 +245,22 @@ impl MahaWindow {
         let cap = self.ring.len();
         if self.len == cap {
             let old = self.ring[self.head];
-            let o2 = outer(&old);
-            for a in 0..3 {
-                self.sum[a] -= old[a];
-            }
-            for k in 0..6 {
-                self.sq[k] -= o2[k];
-            }
+            self.accumulate(&old, -1.0);
         } else {
             self.len += 1;
         }
         self.ring[self.head] = x;
         self.head = (self.head + 1) % cap;
-        let x2 = outer(&x);
-        for a in 0..3 {
-            self.sum[a] += x[a];
-        }
-        for k in 0..6 {
-            self.sq[k] += x2[k];
-        }
+        self.accumulate(&x, 1.0);
         self.since_resum += 1;
         if self.since_resum >= cap {
+            // Re-sum exactly once per window to shed rounding.
             self.since_resum = 0;
             self.sum = [0.0; 3];
             self.sq = [0.0; 6];
-            for r in &self.ring[..self.len] {
-                let r2 = outer(r);
-                for a in 0..3 {
-                    self.sum[a] += r[a];
-                }
-                for k in 0..6 {
-                    self.sq[k] += r2[k];
-                }
+            for i in 0..self.len {
+                let r = self.ring[i];
+                self.accumulate(&r, 1.0);
             }
         }
     }
