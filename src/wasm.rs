@@ -124,6 +124,13 @@ export interface AuditReport {
 }
 /** Residual columns: GPS position N/E/D (m), velocity N/E/D (m/s), baro (m); NaN on rows without that measurement. */
 export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array; rPn: Float64Array; rPe: Float64Array; rPd: Float64Array; rVn: Float64Array; rVe: Float64Array; rVd: Float64Array; rBaro: Float64Array } }
+/** One epoch for the tightly coupled detector: IMU (rad/s, m/s^2) and pseudo-ranges (m); `pr: []` on IMU-only rows. */
+export interface TightRow { t: number; gyro: [number, number, number]; accel: [number, number, number]; pr: { prn: number; pr: number }[] }
+export interface TightOutput {
+  t: number; status: "initializing" | "no-gnss" | "ok" | "fault"; faulty_prn: number | null; statistic: number | null;
+  lambda_max: number; rdpop: number | null; action: string | null; n_sats: number;
+  position_ned: [number, number, number]; velocity_ned: [number, number, number]; clock_bias_m: number;
+}
 export interface SnapshotInfo { version: number; crateVersion: string; bytes: number }
 export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][]; topicCounts: [string, number][] }
 "#;
@@ -565,14 +572,15 @@ impl TightDetectorJs {
     }
 
     /// One epoch row; returns `{ t, status, faulty_prn, statistic, lambda_max, rdpop, action, n_sats, position_ned, ... }`.
-    pub fn push(&mut self, #[wasm_bindgen(unchecked_param_type = "object")] row: JsValue) -> Result<JsValue, JsError> {
+    #[wasm_bindgen(unchecked_return_type = "TightOutput")]
+    pub fn push(&mut self, #[wasm_bindgen(unchecked_param_type = "TightRow")] row: JsValue) -> Result<JsValue, JsError> {
         let row: crate::tight::stream::EpochRow = serde_wasm_bindgen::from_value(row).map_err(|e| err(format!("tight row: {e}")))?;
         let out = self.inner.push(&row).map_err(err)?;
         serde_wasm_bindgen::to_value(&out).map_err(err)
     }
 
     /// Every row of a pseudo-range CSV (`pr_<prn>` or `sat_id` layout); an array of outputs.
-    #[wasm_bindgen(js_name = pushCsv)]
+    #[wasm_bindgen(js_name = pushCsv, unchecked_return_type = "TightOutput[]")]
     pub fn push_csv(&mut self, text: &str) -> Result<JsValue, JsError> {
         let rows = crate::tight::stream::parse_csv(text).map_err(err)?;
         let out = self.inner.run(&rows).map_err(err)?;
@@ -584,7 +592,7 @@ impl TightDetectorJs {
 /// Table 3 plus Env 5), fault type 1–5 (Table 4; 0 = none), seed. Returns
 /// `{ csv, config, faultyPrn, faultStart, faultEnd }`: feed `csv` to a
 /// `new TightDetector(config)`.
-#[wasm_bindgen(js_name = tightSimulate)]
+#[wasm_bindgen(js_name = tightSimulate, unchecked_return_type = "{ csv: string; config: object; faultyPrn: number; faultStart: number; faultEnd: number }")]
 pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, JsError> {
     use crate::tight::fdi::{FdsrConfig, Strategy};
     use crate::tight::scenario::{environments, run_with_rows, FaultSpec, FaultType, RunSpec, SimConfig, World};
