@@ -451,7 +451,7 @@ impl Detector {
         Ok(())
     }
 
-    #[cfg(test)]
+    #[cfg(all(test, not(target_arch = "wasm32")))]
     pub(crate) fn forge_ring_head_for_test(&mut self, head: usize) {
         self.d1.head = head;
     }
