@@ -357,26 +357,35 @@ pub fn default_pool(method: Method) -> Result<PoolState, String> {
     Ok(pools[k].clone())
 }
 
-/// Collect (speed, largest γ) at every GPS epoch of clean flights, with the
-/// verdicts forced normal, and fit RT, KT and AT pools over speed quartiles.
-pub fn fit_pools(seeds: core::ops::Range<u64>) -> Result<[PoolState; 3], String> {
+/// Run `method` over clean simulated flights (aggressive, survey and paper
+/// trajectories, 300 s, seeds `seeds`) with verdicts forced normal, calling
+/// `each(detector, score)` at every GPS epoch with a positive score.
+fn clean_epochs(seeds: core::ops::Range<u64>, method: Method, mut each: impl FnMut(&crate::Detector, f64)) -> Result<(), String> {
     use crate::sim::{simulate, Scenario, Trajectory};
-    let mut data: Vec<(f64, f64)> = vec![];
     for seed in seeds {
         for tr in [Trajectory::Aggressive, Trajectory::Survey, Trajectory::Paper] {
             let rows = simulate(&Scenario::clean(tr, seed, 300.0))?;
-            let cfg = crate::Config { method: Method::Chi2, ..crate::Config::default() };
-            let mut det = crate::Detector::new(cfg)?;
+            let mut det = crate::Detector::new(crate::Config { method, ..crate::Config::default() })?;
             det.set_oracle(true);
             for s in &rows {
                 let o = det.push(s).map_err(|e| e.to_string())?;
                 if o.gps_epoch && o.f > 0.0 {
-                    let v = det.velocity().unwrap_or_else(Vector3::zeros);
-                    data.push((v[0].hypot(v[1]), o.f * N_ALPHA_HALF));
+                    each(&det, o.f);
                 }
             }
         }
     }
+    Ok(())
+}
+
+/// Collect (speed, largest γ) at every GPS epoch of clean flights, with the
+/// verdicts forced normal, and fit RT, KT and AT pools over speed quartiles.
+pub fn fit_pools(seeds: core::ops::Range<u64>) -> Result<[PoolState; 3], String> {
+    let mut data: Vec<(f64, f64)> = vec![];
+    clean_epochs(seeds, Method::Chi2, |det, f| {
+        let v = det.velocity().unwrap_or_else(Vector3::zeros);
+        data.push((v[0].hypot(v[1]), f * N_ALPHA_HALF));
+    })?;
     let mut speeds: Vec<f64> = data.iter().map(|d| d.0).collect();
     speeds.sort_by(f64::total_cmp);
     let q = |p: f64| speeds[((speeds.len() as f64 * p) as usize).min(speeds.len().saturating_sub(1))];
@@ -401,22 +410,8 @@ pub fn fit_pools(seeds: core::ops::Range<u64>) -> Result<[PoolState; 3], String>
 /// (aggressive, survey and paper trajectories, seeds `seeds`), with the
 /// verdicts forced to "normal" so every epoch enters the reference window.
 pub fn calibrate_mahalanobis(seeds: core::ops::Range<u64>) -> Result<f64, String> {
-    use crate::sim::{simulate, Scenario, Trajectory};
     let mut d2 = vec![];
-    for seed in seeds {
-        for tr in [Trajectory::Aggressive, Trajectory::Survey, Trajectory::Paper] {
-            let rows = simulate(&Scenario::clean(tr, seed, 300.0))?;
-            let cfg = crate::Config { method: Method::Mahalanobis, ..crate::Config::default() };
-            let mut det = crate::Detector::new(cfg)?;
-            det.set_oracle(true);
-            for s in &rows {
-                let o = det.push(s).map_err(|e| e.to_string())?;
-                if o.gps_epoch && o.f > 0.0 {
-                    d2.push(o.f * MAHA_D2);
-                }
-            }
-        }
-    }
+    clean_epochs(seeds, Method::Mahalanobis, |_, f| d2.push(f * MAHA_D2))?;
     if d2.is_empty() {
         return Err("calibrate_mahalanobis: no epochs".into());
     }
