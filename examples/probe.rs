@@ -54,9 +54,9 @@ fn line(name: &str, seed: u64, m: &metrics::Metrics) -> String {
 
 fn logs() {
     let files = [
-        "/work/shared/data/csv/ansfl_phantom4_rtk_clean.csv",
-        "/work/shared/data/ardupilot/Loiter_RTL.bin",
-        "/work/shared/data/px4/sample_px4_events.ulg",
+        "../shared/data/csv/ansfl_phantom4_rtk_clean.csv",
+        "../shared/data/ardupilot/Loiter_RTL.bin",
+        "../shared/data/px4/sample_px4_events.ulg",
     ];
     for f in files {
         let Ok(bytes) = std::fs::read(f) else {
