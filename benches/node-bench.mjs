@@ -54,6 +54,13 @@ for (const dir of ['px4', 'ardupilot']) {
   }
 }
 
+// Snapshot and restore of a detector that has run the paper scenario.
+const sd = new ng.Detector({});
+sd.pushColumns(cols);
+const snap = sd.snapshot();
+const snapshotMs = best(50, () => sd.snapshot());
+const restoreMs = best(50, () => ng.Detector.restore(snap).free());
+sd.free();
 const wasmSize = statSync(join(root, 'pkg', 'navguard_bg.wasm')).size;
 const fmt = (x) => Math.round(x).toLocaleString('en-US');
 console.log(JSON.stringify({
@@ -67,5 +74,8 @@ console.log(JSON.stringify({
   memoryBytesAtEnd: memEnd,
   wasmBytes: wasmSize,
   readLogMBPerS: parse,
+  snapshotBytes: snap.length,
+  snapshotMs: +snapshotMs.toFixed(3),
+  restoreMs: +restoreMs.toFixed(3),
 }, null, 2));
 console.error(`pushColumns ${fmt(n / (noRetrain / 1000))} rows/s, push ${fmt(n / (push / 1000))} rows/s, paper scenario ${whole.toFixed(1)} ms, .wasm ${fmt(wasmSize)} B`);

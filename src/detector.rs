@@ -774,34 +774,41 @@ impl Detector {
         self.last_ind = ind;
         let x = inputs(ind.r, ind.c);
         let f_anfis = self.anfis.eval(&x);
-        // Another method's decision on the same innovations (see `methods`).
-        let mut nu = [f64::NAN; 6];
-        nu[..3].copy_from_slice(&pin.nu);
-        let mut inn = EpochInnovations { nu, s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(), m: 3, baro: self.baro_inn.take() };
-        for a in 0..3 {
-            inn.s[(a, a)] = pin.s[a];
-        }
-        if let Some(vin) = &vin_opt {
-            inn.m = 6;
+        // Another method's decision on the same innovations (see `methods`);
+        // nothing to build for the default ANFIS.
+        let baro_inn = self.baro_inn.take();
+        let mut dr = [[f64::NAN; 3]; 2];
+        let dec: Option<Decision> = if self.cfg.method == Method::Anfis {
+            None
+        } else {
+            let mut nu = [f64::NAN; 6];
+            nu[..3].copy_from_slice(&pin.nu);
+            let mut inn = EpochInnovations { nu, s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(), m: 3, baro: baro_inn };
             for a in 0..3 {
-                inn.nu[3 + a] = vin.nu[a];
-                inn.s[(3 + a, 3 + a)] = vin.s[a];
+                inn.s[(a, a)] = pin.s[a];
             }
-        }
-        let dr: [[f64; 3]; 2] = core::array::from_fn(|g| {
-            core::array::from_fn(|a| self.prev_nu.map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a]))
-        });
-        self.prev_nu = Some(inn.nu);
-        let dec: Option<Decision> = match self.cfg.method {
-            Method::Anfis => None,
-            Method::Chi2 => Some(methods::chi2(&inn)),
-            Method::Nis => Some(methods::nis(&inn)),
-            Method::Gate => Some(methods::gate(&inn)),
-            Method::Mahalanobis => Some(methods::mahalanobis(&self.maha, dr, inn.m == 6)),
-            Method::Rms | Method::Knee | Method::Adaptive => {
-                let v = kf.velocity();
-                let speed = v[0].hypot(v[1]);
-                self.pool.as_mut().map(|p| p.decide(&inn, speed))
+            if let Some(vin) = &vin_opt {
+                inn.m = 6;
+                for a in 0..3 {
+                    inn.nu[3 + a] = vin.nu[a];
+                    inn.s[(3 + a, 3 + a)] = vin.s[a];
+                }
+            }
+            dr = core::array::from_fn(|g| {
+                core::array::from_fn(|a| self.prev_nu.map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a]))
+            });
+            self.prev_nu = Some(inn.nu);
+            match self.cfg.method {
+                Method::Anfis => None,
+                Method::Chi2 => Some(methods::chi2(&inn)),
+                Method::Nis => Some(methods::nis(&inn)),
+                Method::Gate => Some(methods::gate(&inn)),
+                Method::Mahalanobis => Some(methods::mahalanobis(&self.maha, dr, inn.m == 6)),
+                Method::Rms | Method::Knee | Method::Adaptive => {
+                    let v = kf.velocity();
+                    let speed = v[0].hypot(v[1]);
+                    self.pool.as_mut().map(|p| p.decide(&inn, speed))
+                }
             }
         };
         let f = dec.map_or(f_anfis, |d| d.score);
