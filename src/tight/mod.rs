@@ -11,6 +11,10 @@
 //!   (eq. 26) and the RDPOP switch between isolation and reconstruction.
 //! * [`scenario`]: the observation environments of Table 3, the fault types
 //!   of Table 4, a pseudo-range/IMU simulator and the evaluation loop.
+//! * [`chaos`]: chaos analysis of the pseudo-range increment difference
+//!   (§2.2, eqs. 10–16, Table 1): mutual-information delay, Cao embedding
+//!   dimension, phase-space reconstruction, FFT mean period and the
+//!   Rosenstein largest Lyapunov exponent.
 //! * [`stream`]: [`stream::TightDetector`], the streaming API over raw
 //!   per-epoch rows, and the CSV reader for the `pr_<prn>` row format.
 //!
@@ -19,6 +23,7 @@
 //! radians inside the library, times in seconds, clock terms in metres
 //! (bias) and metres per second (drift).
 
+pub mod chaos;
 pub mod constellation;
 pub mod fdi;
 pub mod scenario;
