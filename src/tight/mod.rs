@@ -1,6 +1,6 @@
 //! Tightly coupled GNSS/INS with per-satellite fault detection and system
 //! reconfiguration, after Shen et al. 2022, "GAN-FDSR"
-//! (`../shared/papers/shen2022_gan_fdsr.txt`), everything except the GAN.
+//! (`../shared/papers/shen2022_gan_fdsr.txt`), with the GAN in [`gan`].
 //!
 //! * [`constellation`]: GPS-like MEO constellation, site frame, visibility, DOP.
 //! * [`tc_ekf`]: 17-state error-state EKF (attitude, velocity, position, gyro
@@ -11,6 +11,8 @@
 //!   (eq. 26) and the RDPOP switch between isolation and reconstruction.
 //! * [`scenario`]: the observation environments of Table 3, the fault types
 //!   of Table 4, a pseudo-range/IMU simulator and the evaluation loop.
+//! * [`gan`]: the GRU GAN detector of §3.1–3.2 (training, latent search,
+//!   `Score(y)`, threshold `T2`), hand-written over `f64`.
 //! * [`stream`]: [`stream::TightDetector`], the streaming API over raw
 //!   per-epoch rows, and the CSV reader for the `pr_<prn>` row format.
 //!
@@ -21,6 +23,7 @@
 
 pub mod constellation;
 pub mod fdi;
+pub mod gan;
 pub mod scenario;
 pub mod stream;
 pub mod tc_ekf;
