@@ -1,6 +1,6 @@
 //! Tightly coupled GNSS/INS with per-satellite fault detection and system
 //! reconfiguration, after Shen et al. 2022, "GAN-FDSR"
-//! (`../shared/papers/shen2022_gan_fdsr.txt`), everything except the GAN.
+//! (`../shared/papers/shen2022_gan_fdsr.txt`), with the GAN in [`gan`].
 //!
 //! * [`constellation`]: GPS-like MEO constellation, site frame, visibility, DOP.
 //! * [`tc_ekf`]: 17-state error-state EKF (attitude, velocity, position, gyro
@@ -15,6 +15,11 @@
 //!   (§2.2, eqs. 10–16, Table 1): mutual-information delay, Cao embedding
 //!   dimension, phase-space reconstruction, FFT mean period and the
 //!   Rosenstein largest Lyapunov exponent.
+//! * [`gan`]: the GRU GAN detector of §3.1–3.2 (training, latent search,
+//!   `Score(y)`, threshold `T2`), hand-written over `f64`.
+//! * [`gan_fdsr`]: GAN-FDSR per satellite: ρD windows scored against T2,
+//!   the flagged satellite rebuilt from the generator (eq. 12); the model
+//!   training pipeline and the embedded default model.
 //! * [`stream`]: [`stream::TightDetector`], the streaming API over raw
 //!   per-epoch rows, and the CSV reader for the `pr_<prn>` row format.
 //!
@@ -26,6 +31,8 @@
 pub mod chaos;
 pub mod constellation;
 pub mod fdi;
+pub mod gan;
+pub mod gan_fdsr;
 pub mod scenario;
 pub mod stream;
 pub mod tc_ekf;
