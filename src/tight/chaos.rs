@@ -96,11 +96,12 @@ pub fn increment_difference(rho_g: &[f64], rho_i: &[f64]) -> Result<Vec<f64>, Ti
 /// Default β for [`mutual_information`] on a series of `n` samples:
 /// ⌊√(n/5)⌋ clamped to [4, 200].
 ///
-/// Why: the histogram estimate of E(τ) is biased upwards by roughly
-/// (β − 1)²/(2(N − τ)) nats when cells are sparsely filled, which swamps the
-/// minimum being looked for. Asking for about 5 points per occupied cell on
-/// average over a β×β grid whose mass concentrates on ~β cells per row
-/// (Cellucci et al. 2005 style) gives β ≈ √(N/5). The paper's β ∈ [100, 200]
+/// Why: the histogram estimate of E(τ) is biased upwards by about
+/// (β − 1)²/(2(N − τ)) nats, and sparsely filled cells make that bias and
+/// the scatter swamp the shallow minimum being looked for. Cellucci et al.
+/// (2005) advise at most √(N/5) cells per axis, i.e. at least 5 expected
+/// points per cell of the β×β grid for independent uniform marginals. The
+/// paper's β ∈ [100, 200]
 /// then corresponds to N ≈ 50 000–200 000 samples; for a few hundred samples
 /// it gives 6–10 cells, where 100 cells would leave almost every cell with
 /// zero or one point.
@@ -131,7 +132,7 @@ fn cell(x: f64, lo: f64, span: f64, bins: usize) -> usize {
 /// for short series); β ≤ [`MAX_BINS`] bounds memory. Cost O(N + β²).
 pub fn mutual_information(r: &[f64], tau: usize, bins: usize) -> Result<f64, TightError> {
     check_series("r", r, 2)?;
-    if bins < 2 || bins > MAX_BINS {
+    if !(2..=MAX_BINS).contains(&bins) {
         return Err(TightError::new("bins", format!("β must be in 2..={MAX_BINS}, got {bins}")));
     }
     if tau == 0 || tau > r.len() - 2 {
@@ -144,7 +145,7 @@ pub fn mutual_information(r: &[f64], tau: usize, bins: usize) -> Result<f64, Tig
         (lo.min(x), hi.max(x))
     });
     let span = hi - lo;
-    if !(span > 0.0) || !span.is_finite() {
+    if !(span.is_finite() && span > 0.0) {
         // Constant series (or a range that overflows f64): no information.
         return Ok(0.0);
     }
@@ -606,7 +607,7 @@ pub fn mean_period(r: &[f64]) -> Result<f64, TightError> {
         num += p * k as f64 / nfft as f64;
         den += p;
     }
-    if !(den > 0.0) || !(num > 0.0) {
+    if !(den.is_finite() && den > 0.0 && num > 0.0) {
         return Err(TightError::new("r", "series is constant: no period"));
     }
     Ok(den / num)
@@ -803,7 +804,14 @@ pub fn analyze(r: &[f64], dt: f64, opts: &ChaosOptions) -> Result<ChaosIndices, 
     let delay = delay_by_mutual_information(r, bins, opts.max_tau)?;
     let c = cao(r, delay.tau, opts.max_m)?;
     let fit = opts.lyapunov_fit.clone().unwrap_or(0..opts.lyapunov_steps);
-    let ly = largest_lyapunov_fit(r, c.dimension, delay.tau, dt, opts.lyapunov_steps, fit)?;
+    let ly = largest_lyapunov_fit(r, c.dimension, delay.tau, dt, opts.lyapunov_steps, fit)
+        .map_err(|mut e| {
+            // Name the option the caller actually set.
+            if e.field == "steps" || e.field == "fit" {
+                e.field = format!("lyapunov_{}", e.field);
+            }
+            e
+        })?;
     Ok(ChaosIndices {
         tau: delay.tau,
         tau_found_minimum: delay.found_minimum,
@@ -876,7 +884,7 @@ mod tests {
                 s[d] += h / 6.0 * (k1[d] + 2.0 * k2[d] + 2.0 * k3[d] + k4[d]);
             }
             k += 1;
-            if k >= 2000 && k % every == 0 {
+            if k >= 2000 && k.is_multiple_of(every) {
                 out.push(s[0]);
             }
         }
@@ -1091,6 +1099,8 @@ mod tests {
         assert_eq!(lines[2], format!("| G8 | {} | {} | {:.4} |", c.tau, c.m, c.lyapunov));
         assert!(lines[3].starts_with("| a\\|b |"));
         assert_eq!(field(analyze(&x, -1.0, &opts).unwrap_err()), "dt");
+        let bad = ChaosOptions { lyapunov_fit: Some(0..151), ..opts.clone() };
+        assert_eq!(field(analyze(&x, 0.02, &bad).unwrap_err()), "lyapunov_fit");
     }
 
     proptest::proptest! {
