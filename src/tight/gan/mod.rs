@@ -21,6 +21,10 @@
 //! * The discrimination part of `Score` is `1 − D(y)`, so that both parts grow
 //!   with abnormality (the paper writes `D(y)`, which would *lower* the score
 //!   of a sequence the discriminator rejects).
+//! * The latent search adds a Gaussian prior term `γ‖z‖²/(2·w·latent)`
+//!   ([`GanConfig::z_prior`]) and keeps a warm start only when it beats the
+//!   seeded cold draw: without these, warm-started chains drifted to
+//!   `rms(z) ≈ 15`, far outside the training prior, and fitted worse.
 //! * `R_G` is computed with the same latent search as at detection time
 //!   (the paper's `G(z_s)` is ambiguous), so the normalisation matches.
 //! * `T2 = max(μ + z_{1−α}σ, empirical (1−α) quantile)`, see [`Threshold`].

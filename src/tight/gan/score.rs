@@ -187,9 +187,11 @@ impl GanModel {
     /// steps (β1 = 0.9, rate `z_lr`) with gradients backpropagated through
     /// `G` to its inputs. `Cov` of the paper is taken as the Pearson
     /// correlation: scale-free and bounded, so `z_lr` does not depend on the
-    /// data scale. Starts from `z0` (warm start) or, if `None`, from a seeded
-    /// `N(0, 1)` draw (same draw on every call, so scores are reproducible).
-    /// Returns the best iterate `(z_k, G(z_k), ρ)`.
+    /// data scale. The objective adds the prior term `γ‖z‖²/(2·w·latent)`
+    /// (`γ` = [`GanConfig::z_prior`]). Starts from a seeded `N(0, 1)` draw
+    /// (same draw on every call, so scores are reproducible), or from `z0`
+    /// (warm start) when `z0` has the lower objective. Returns the iterate
+    /// with the lowest objective, `(z_k, G(z_k), ρ(y, G(z_k)))`.
     pub fn search_latent(&self, y: &[f64], z0: Option<&[f64]>) -> Result<(Vec<f64>, Vec<f64>, f64), TightError> {
         let mut s = GanScratch::default();
         check_vec("y", y, self.cfg.window_len())?;

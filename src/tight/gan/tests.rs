@@ -357,7 +357,14 @@ fn training_learns_the_process_and_detects_shifts() {
     let hs = model.score_stream(&held).unwrap();
     let fa = hs.iter().filter(|s| model.is_fault(s)).count() as f64 / hs.len() as f64;
     let normal_mean = hs.iter().map(|s| s.score).sum::<f64>() / hs.len() as f64;
-    println!("held-out false alarms {fa:.3}, mean score {normal_mean:.3}");
+    let rms_z = hs.iter().map(|s| (s.z.iter().map(|v| v * v).sum::<f64>() / s.z.len() as f64).sqrt()).sum::<f64>()
+        / hs.len() as f64;
+    let corr = hs.iter().map(|s| s.corr).sum::<f64>() / hs.len() as f64;
+    println!("held-out false alarms {fa:.3}, mean score {normal_mean:.3}, mean corr {corr:.3}, mean rms z {rms_z:.2}");
+    // Warm-started searches stay near the prior (they drifted to rms ≈ 15
+    // without the z_prior term) and still fit the shape.
+    assert!(rms_z < 2.0, "{rms_z}");
+    assert!(corr > 0.8, "{corr}");
     assert!(fa <= 0.12, "{fa}");
 
     // +1.5σ mean shift: higher scores on average.
@@ -365,7 +372,10 @@ fn training_learns_the_process_and_detects_shifts() {
     let ss = model.score_stream(&shifted).unwrap();
     let shift_mean = ss.iter().map(|s| s.score).sum::<f64>() / ss.len() as f64;
     let det = ss.iter().filter(|s| model.is_fault(s)).count() as f64 / ss.len() as f64;
-    println!("shifted mean score {shift_mean:.3}, detection rate {det:.3}");
+    let shift_d = ss.iter().map(|s| s.d).sum::<f64>() / ss.len() as f64;
+    let shift_gs = ss.iter().map(|s| s.gs_norm).sum::<f64>() / ss.len() as f64;
+    let norm_gs = hs.iter().map(|s| s.gs_norm).sum::<f64>() / hs.len() as f64;
+    println!("shifted mean score {shift_mean:.3}, detection rate {det:.3}; D {shift_d:.3} vs {d_real:.3}, gs_norm {shift_gs:.3} vs {norm_gs:.3}");
     assert!(shift_mean > normal_mean + 0.1, "{shift_mean} vs {normal_mean}");
 }
 
