@@ -128,9 +128,13 @@ export interface AuditResult { report: AuditReport; columns: { t: Float64Array; 
 export interface TightRow { t: number; gyro: [number, number, number]; accel: [number, number, number]; pr: { prn: number; pr: number }[] }
 export interface TightOutput {
   t: number; status: "initializing" | "no-gnss" | "ok" | "fault"; faulty_prn: number | null; statistic: number | null;
-  lambda_max: number; rdpop: number | null; action: string | null; n_sats: number;
+  lambda_max: number; rdpop: number | null; action: string | null; gan_score_max: number | null; n_sats: number;
   position_ned: [number, number, number]; velocity_ned: [number, number, number]; clock_bias_m: number;
 }
+/** Options of `tightGanTrain` (all optional): fault-free training and calibration flights, GAN size. */
+export interface GanTrainOptions { trainSeeds?: number[]; calibSeeds?: number[]; epochs?: number; hidden?: number; window?: number; alpha?: number }
+export interface GanTrainProgress { epoch: number; epochs: number; dLoss: number; gLoss: number; dReal: number; dFake: number }
+export interface GanTrainResult { model: Uint8Array; tau: number; m: number; lambda: number; t2: number; falseAlarm: number; trainWindows: number; calibWindows: number; parameters: number; table1: string }
 export interface SnapshotInfo { version: number; crateVersion: string; bytes: number }
 export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][]; topicCounts: [string, number][] }
 "#;
@@ -579,6 +583,19 @@ impl TightDetectorJs {
         serde_wasm_bindgen::to_value(&out).map_err(err)
     }
 
+    /// GAN-FDSR with a model from `tightGanTrain` (its `model` bytes) instead
+    /// of the embedded one; `config` as for the constructor.
+    #[wasm_bindgen(js_name = withGanModel)]
+    pub fn with_gan_model(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue, model: &[u8]) -> Result<TightDetectorJs, JsError> {
+        let cfg: crate::tight::stream::TightConfig = if config.is_undefined() || config.is_null() {
+            Default::default()
+        } else {
+            serde_wasm_bindgen::from_value(config).map_err(|e| err(format!("tight config: {e}")))?
+        };
+        let model = crate::tight::gan_fdsr::GanDetectorModel::from_bytes(model).map_err(err)?;
+        Ok(TightDetectorJs { inner: crate::tight::stream::TightDetector::with_gan(cfg, model).map_err(err)? })
+    }
+
     /// Every row of a pseudo-range CSV (`pr_<prn>` or `sat_id` layout); an array of outputs.
     #[wasm_bindgen(js_name = pushCsv, unchecked_return_type = "TightOutput[]")]
     pub fn push_csv(&mut self, text: &str) -> Result<JsValue, JsError> {
@@ -621,6 +638,7 @@ pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, J
         fault,
         fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
         seed: seed as u64,
+        gan: None,
     };
     let (_, rows, init) = run_with_rows(&spec).map_err(err)?;
     let tc = crate::tight::stream::TightConfig { t0: world.t0, strategy: Strategy::Fdi, initial: Some(init), ..Default::default() };
@@ -630,6 +648,93 @@ pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, J
     set(&out, "faultyPrn", &JsValue::from(e.faulty_prn));
     set(&out, "faultStart", &JsValue::from(e.fault_start));
     set(&out, "faultEnd", &JsValue::from(e.fault_end));
+    Ok(out.into())
+}
+
+/// Train a GAN-FDSR model in the page (small models: a few flights and
+/// epochs), as `navguard-gan train` does natively. `onProgress` is called
+/// after every epoch with `{ epoch, epochs, dLoss, gLoss, dReal, dFake }`;
+/// returning `false` cancels. The `model` bytes go to
+/// `TightDetector.withGanModel`.
+#[wasm_bindgen(js_name = tightGanTrain, unchecked_return_type = "GanTrainResult")]
+pub fn tight_gan_train(
+    #[wasm_bindgen(unchecked_param_type = "GanTrainOptions | undefined")] options: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "((p: GanTrainProgress) => boolean | void) | undefined")] on_progress: JsValue,
+) -> Result<JsValue, JsError> {
+    use crate::tight::gan_fdsr::{train_detector, GanTrainOptions};
+    use crate::tight::scenario::{environments, SimConfig, World};
+    let mut opts = GanTrainOptions::default();
+    // Small by default: the page trains in seconds, not minutes.
+    opts.train_seeds = vec![101, 102];
+    opts.calib_seeds = vec![201, 202];
+    opts.gan.epochs = 5;
+    if !(options.is_undefined() || options.is_null()) {
+        let get = |k: &str| js_sys::Reflect::get(&options, &JsValue::from_str(k)).unwrap_or(JsValue::UNDEFINED);
+        let seeds = |k: &str| -> Result<Option<Vec<u64>>, JsError> {
+            let v = get(k);
+            if v.is_undefined() {
+                return Ok(None);
+            }
+            let arr: Vec<f64> = serde_wasm_bindgen::from_value(v).map_err(|e| err(format!("tightGanTrain: {k}: {e}")))?;
+            if arr.is_empty() || arr.iter().any(|x| !(x.is_finite() && *x >= 0.0 && x.fract() == 0.0)) {
+                return Err(err(format!("tightGanTrain: {k} must be a non-empty array of non-negative integers, got {arr:?}")));
+            }
+            Ok(Some(arr.into_iter().map(|x| x as u64).collect()))
+        };
+        if let Some(s) = seeds("trainSeeds")? {
+            opts.train_seeds = s;
+        }
+        if let Some(s) = seeds("calibSeeds")? {
+            opts.calib_seeds = s;
+        }
+        for (k, slot, lo, hi) in [("epochs", &mut opts.gan.epochs, 1usize, 1000usize), ("hidden", &mut opts.gan.hidden, 1, 128), ("window", &mut opts.gan.window, 2, 200)] {
+            let v = get(k);
+            if v.is_undefined() {
+                continue;
+            }
+            match v.as_f64() {
+                Some(x) if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => *slot = x as usize,
+                _ => return Err(err(format!("tightGanTrain: {k} must be an integer in {lo}..={hi}, got {v:?}"))),
+            }
+        }
+        let a = get("alpha");
+        if !a.is_undefined() {
+            opts.alpha = a.as_f64().filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| err(format!("tightGanTrain: alpha must be in (0, 1), got {a:?}")))?;
+        }
+    }
+    let cb = on_progress.dyn_ref::<js_sys::Function>().cloned();
+    let sim = SimConfig::default();
+    let world = World::new(&sim).map_err(err)?;
+    let envs = environments(&world, &sim).map_err(err)?;
+    let prns = envs.first().ok_or_else(|| err("tightGanTrain: no environment"))?.prns.clone();
+    let (model, report) = train_detector(&world, &sim, &prns, &opts, &mut |p| {
+        let Some(f) = cb.as_ref() else { return true };
+        let o = Object::new();
+        set(&o, "epoch", &JsValue::from(p.epoch as f64));
+        set(&o, "epochs", &JsValue::from(p.epochs as f64));
+        set(&o, "dLoss", &JsValue::from(p.d_loss));
+        set(&o, "gLoss", &JsValue::from(p.g_loss));
+        set(&o, "dReal", &JsValue::from(p.d_real));
+        set(&o, "dFake", &JsValue::from(p.d_fake));
+        // A throwing or `false`-returning callback cancels training.
+        match f.call1(&JsValue::NULL, &o) {
+            Ok(v) => v.as_bool() != Some(false),
+            Err(_) => false,
+        }
+    })
+    .map_err(err)?;
+    let bytes = model.to_bytes().map_err(err)?;
+    let out = Object::new();
+    set(&out, "model", &js_sys::Uint8Array::from(bytes.as_slice()).into());
+    set(&out, "tau", &JsValue::from(report.tau as f64));
+    set(&out, "m", &JsValue::from(report.m as f64));
+    set(&out, "lambda", &JsValue::from(model.gan.lambda()));
+    set(&out, "t2", &JsValue::from(model.gan.t2()));
+    set(&out, "falseAlarm", &JsValue::from(report.threshold.false_alarm));
+    set(&out, "trainWindows", &JsValue::from(report.train_windows as f64));
+    set(&out, "calibWindows", &JsValue::from(report.calib_windows as f64));
+    set(&out, "parameters", &JsValue::from(model.gan.param_count() as f64));
+    set(&out, "table1", &crate::tight::chaos::table1_markdown(&report.chaos).into());
     Ok(out.into())
 }
 

@@ -42,6 +42,7 @@ fn fdi_flags_20m_step_at_onset_and_names_the_satellite() {
                 fault: Some(fault),
                 fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
                 seed,
+                gan: None,
             };
             let r = run(&spec).unwrap();
             let i = r.t.iter().position(|&t| t >= fault.start).unwrap();
@@ -71,6 +72,7 @@ fn rdpop_is_larger_in_poor_geometry() {
             fault: None,
             fdsr: FdsrConfig { strategy: Strategy::None, alpha: 0.001, eta: 0.035 },
             seed: 1,
+            gan: None,
         };
         let r = run(&spec).unwrap();
         r.mean_of(&r.rdpop_faulty, env.fault_start, env.fault_end)
@@ -110,6 +112,7 @@ fn streaming_detector_names_the_faulty_satellite_from_csv() {
         fault: Some(fault),
         fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
         seed: 7,
+        gan: None,
     };
     let (_, rows, init) = run_with_rows(&spec).unwrap();
     // Through the documented CSV format and back.
@@ -153,6 +156,7 @@ fn gradual_faults_are_detected_late_in_good_geometry() {
                     fault: Some(fault),
                     fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
                     seed,
+                    gan: None,
                 };
                 run(&spec).unwrap().detection_delay(env.faulty_prn, 300.0, 360.0).unwrap_or(60.0)
             })

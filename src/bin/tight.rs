@@ -165,6 +165,7 @@ fn real_main() -> Result<(), String> {
                     fault: Some(fault),
                     fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta },
                     seed: sd,
+                    gan: None,
                 };
                 let r = run(&spec).map_err(|e| e.to_string())?;
                 delays.push(r.detection_delay(e.faulty_prn, fault.start, fault.end).map_or("-".to_string(), |d| format!("{d:.0}")));

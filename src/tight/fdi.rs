@@ -10,6 +10,7 @@ use std::collections::BTreeMap;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
+use super::gan_fdsr::{default_model, GanDetectorModel, GanMonitor};
 use super::tc_ekf::{Linearized, Mat17, PrMeas, TcEkf, N, POS};
 use super::TightError;
 
@@ -237,6 +238,9 @@ pub enum Strategy {
     /// Detection then RDPOP switch (eq. 27): reconstruct when RDPOP > η,
     /// else isolate.
     Switch,
+    /// GAN-FDSR: the GAN detection function (score > T2) then the RDPOP
+    /// switch, reconstructing from the generator (eq. 12).
+    Gan,
 }
 
 impl Strategy {
@@ -246,6 +250,7 @@ impl Strategy {
             Strategy::Fdi => "FDI",
             Strategy::Fda => "FDA",
             Strategy::Switch => "RDPOP-switch",
+            Strategy::Gan => "GAN-FDSR",
         }
     }
 }
@@ -279,6 +284,9 @@ pub struct EpochDecision {
     /// RDPOP of the flagged satellite.
     pub rdpop: Option<f64>,
     pub action: Action,
+    /// GAN-FDSR only: (prn, score) per satellite (NaN while its window fills).
+    #[serde(default)]
+    pub gan_scores: Vec<(u8, f64)>,
 }
 
 /// Detection parameters.
@@ -323,12 +331,28 @@ pub struct Reconfigurator {
     pub predictor: Box<dyn RangePredictor>,
     /// Satellites under repair (switch only): prn -> time first flagged, s.
     pub under_repair: BTreeMap<u8, f64>,
+    /// The GAN detection function ([`Strategy::Gan`] only).
+    pub gan: Option<Box<GanMonitor>>,
 }
 
 impl Reconfigurator {
     pub fn new(cfg: FdsrConfig, predictor: Box<dyn RangePredictor>) -> Result<Self, TightError> {
         let t1 = cfg.check()?;
-        Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new() })
+        let gan = match cfg.strategy {
+            Strategy::Gan => Some(Box::new(GanMonitor::new(default_model()?))),
+            _ => None,
+        };
+        Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new(), gan })
+    }
+
+    /// [`Strategy::Gan`] with a given model (e.g. one trained on the user's
+    /// data) in place of the embedded default.
+    pub fn with_gan(cfg: FdsrConfig, model: GanDetectorModel) -> Result<Self, TightError> {
+        let t1 = cfg.check()?;
+        let cfg = FdsrConfig { strategy: Strategy::Gan, ..cfg };
+        // The GAN path rebuilds from its generator; this predictor is unused.
+        let predictor = Box::new(FilterPredictor::new(1.0));
+        Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new(), gan: Some(Box::new(GanMonitor::new(model))) })
     }
 
     /// One GNSS epoch at time `t` (s): test, reconfigure, update the filter.
@@ -341,6 +365,7 @@ impl Reconfigurator {
             detection: None,
             rdpop: None,
             action: Action::NoMeasurements,
+            gan_scores: Vec::new(),
         };
         if lin.is_empty() {
             return out;
@@ -352,6 +377,10 @@ impl Reconfigurator {
         };
         out.lambdas = lin.prns.iter().zip(lam.iter()).map(|(&p, &l)| (p, l)).collect();
         out.lambda_max = lam.iter().fold(0.0f64, |m, l| m.max(l.abs()));
+        if let Some(gan) = self.gan.as_deref_mut() {
+            epoch_gan(gan, &mut self.under_repair, self.t1, cfg.eta, ekf, &lin, &pv, t, &mut out);
+            return out;
+        }
 
         // Satellites under repair stay flagged while they disagree with the
         // predictor; the first one still inconsistent is the detection.
@@ -405,7 +434,7 @@ impl Reconfigurator {
                         Some((a, _, _)) => (a, Action::Adapt),
                         None => (lin.without(d.index), Action::Isolate),
                     },
-                    Strategy::Switch => {
+                    Strategy::Switch | Strategy::Gan => {
                         let rec = if out.rdpop.is_some_and(|r| r > cfg.eta) {
                             self.predictor.reconstruct(t, d.prn, lin.predicted[d.index])
                         } else {
@@ -433,6 +462,100 @@ impl Reconfigurator {
             out.action = Action::Rejected;
         }
         out
+    }
+}
+
+/// One GNSS epoch of GAN-FDSR (Figure 5): score every satellite, keep a
+/// flagged satellite under repair while its pseudo-range disagrees with the
+/// generator's reconstruction (`|ρ − ρ̂| / √(R + σ̂²) > T1`), then reconstruct
+/// (RDPOP > η) or isolate. A step shows in the increment difference only at
+/// its onset, so the repair test is what keeps it out afterwards.
+#[allow(clippy::too_many_arguments)]
+fn epoch_gan(
+    gan: &mut GanMonitor,
+    under_repair: &mut BTreeMap<u8, f64>,
+    t1: f64,
+    eta: f64,
+    ekf: &mut TcEkf,
+    lin: &Linearized,
+    pv: &DMatrix<f64>,
+    t: f64,
+    out: &mut EpochDecision,
+) {
+    let v: Vec<f64> = lin.v.iter().copied().collect();
+    let lam: Vec<f64> = out.lambdas.iter().map(|x| x.1).collect();
+    let sd: Vec<f64> = (0..lin.len()).map(|i| libm::sqrt(pv[(i, i)].max(0.0))).collect();
+    let scores = match gan.epoch(t, &lin.prns, &v, &lam, &sd) {
+        Ok(s) => s,
+        Err(_) => {
+            out.action = Action::Rejected;
+            return;
+        }
+    };
+    out.gan_scores = scores.iter().map(|s| (s.prn, s.score)).collect();
+    let mut det = None;
+    let mut release = Vec::new();
+    for &prn in under_repair.keys() {
+        let Some(i) = lin.index_of(prn) else {
+            release.push(prn);
+            continue;
+        };
+        let pr = lin.predicted[i] + lin.v[i];
+        match gan.reconstruct(prn, lin.predicted[i]) {
+            Some(r) => {
+                let stat = (pr - r.pr) / libm::sqrt(lin.r[(i, i)] + r.variance);
+                if stat.abs() > t1 && det.is_none() {
+                    det = Some(Detection { index: i, prn, lambda: stat });
+                } else if stat.abs() <= t1 {
+                    release.push(prn);
+                }
+            }
+            None => release.push(prn),
+        }
+    }
+    for p in release {
+        under_repair.remove(&p);
+        gan.end_repair(p);
+    }
+    if det.is_none() {
+        let t2 = gan.t2();
+        let best = scores
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.score > t2 && !under_repair.contains_key(&s.prn))
+            .max_by(|a, b| a.1.score.total_cmp(&b.1.score));
+        if let Some((i, s)) = best {
+            det = Some(Detection { index: i, prn: s.prn, lambda: s.score });
+            if gan.start_repair(s.prn, lin.r[(i, i)]) {
+                under_repair.entry(s.prn).or_insert(t);
+            }
+        }
+    }
+    out.detection = det;
+    for i in 0..lin.len() {
+        if det.map(|d| d.index) != Some(i) && !under_repair.contains_key(&lin.prns[i]) {
+            gan.healthy(lin.prns[i], lin.v[i]);
+        }
+    }
+    let (used, action) = match det {
+        None => (lin.clone(), Action::UpdateAll),
+        Some(d) => {
+            out.rdpop = rdpop(&ekf.p, lin, d.index);
+            let rec = if out.rdpop.is_some_and(|r| r > eta) { gan.reconstruct(d.prn, lin.predicted[d.index]) } else { None };
+            match rec {
+                Some(r) => {
+                    let mut l = lin.clone();
+                    l.v[d.index] = r.pr - lin.predicted[d.index];
+                    l.r[(d.index, d.index)] = r.variance + (pv[(d.index, d.index)] - lin.r[(d.index, d.index)]).max(0.0);
+                    (l, Action::Reconstruct)
+                }
+                None => (lin.without(d.index), Action::Isolate),
+            }
+        }
+    };
+    out.action = action;
+    if !used.is_empty() && ekf.update(&used).is_none() {
+        out.action = Action::Rejected;
     }
 }
 

@@ -12,6 +12,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::constellation::{dop, los_vectors, Constellation, Site};
+use super::gan_fdsr::GanDetectorModel;
 use super::fdi::{rdpop, Action, FdsrConfig, FilterPredictor, Reconfigurator, Strategy};
 use super::tc_ekf::{quat_exp, EkfConfig, ImuNoise, NavState, PrMeas, TcEkf, Vec17, GRAVITY, N};
 use super::stream::{EpochRow, InitialState, PrObs};
@@ -411,6 +412,15 @@ pub struct RunRecord {
     pub action: Vec<Action>,
     /// NEES of the full 17-dim error state.
     pub nees: Vec<f64>,
+    /// Per epoch, every tracked satellite's (prn, measured pseudo-range,
+    /// filter-predicted pseudo-range) before the update, m: the GNSS and INS
+    /// pseudo-ranges ρ_G and ρ_I of the paper's eq. 10.
+    #[serde(default)]
+    pub ranges: Vec<Vec<(u8, f64, f64)>>,
+    /// Per epoch, the normalised innovation λ (eq. A2) of each satellite of
+    /// `ranges`, in the same order.
+    #[serde(default)]
+    pub lambdas: Vec<Vec<f64>>,
 }
 
 impl RunRecord {
@@ -473,6 +483,8 @@ pub struct RunSpec<'a> {
     pub fault: Option<FaultSpec>,
     pub fdsr: FdsrConfig,
     pub seed: u64,
+    /// GAN-FDSR model for [`Strategy::Gan`]; `None`: the embedded default.
+    pub gan: Option<&'a GanDetectorModel>,
 }
 
 /// Simulate a flight and run the filter with detection/reconfiguration.
@@ -536,7 +548,10 @@ fn run_inner(spec: &RunSpec, mut rows: Option<&mut Vec<EpochRow>>) -> Result<Run
     x0.clk -= e[15];
     x0.drift -= e[16];
     let mut ekf = TcEkf::new(x0, cfg.ekf)?;
-    let mut fdsr = Reconfigurator::new(spec.fdsr, Box::new(FilterPredictor::new(cfg.ekf.sigma_pr * cfg.ekf.sigma_pr)))?;
+    let mut fdsr = match (spec.fdsr.strategy, spec.gan) {
+        (Strategy::Gan, Some(m)) => Reconfigurator::with_gan(spec.fdsr, m.clone())?,
+        _ => Reconfigurator::new(spec.fdsr, Box::new(FilterPredictor::new(cfg.ekf.sigma_pr * cfg.ekf.sigma_pr)))?,
+    };
 
     // Per-satellite error states.
     let mut tropo = [0.0f64; 256];
@@ -602,10 +617,12 @@ fn run_inner(spec: &RunSpec, mut rows: Option<&mut Vec<EpochRow>>) -> Result<Run
             last.pr = meas.iter().map(|m| PrObs { prn: m.prn, pr: m.pr }).collect();
         }
         let lin = ekf.linearize(&meas);
+        rec.ranges.push(lin.prns.iter().zip(&lin.predicted).zip(lin.v.iter()).map(|((&p, &pred), &v)| (p, pred + v, pred)).collect());
         let watch = lin.index_of(spec.watch_prn);
         let rd = watch.and_then(|i| rdpop(&ekf.p, &lin, i)).unwrap_or(f64::NAN);
         let d = fdsr.epoch(&mut ekf, &meas, te);
         let lam = d.lambdas.iter().find(|(p, _)| *p == spec.watch_prn).map_or(f64::NAN, |x| x.1);
+        rec.lambdas.push(lin.prns.iter().map(|p| d.lambdas.iter().find(|x| x.0 == *p).map_or(f64::NAN, |x| x.1)).collect());
         rec.t.push(te);
         rec.pos_err.push((ekf.x.p - truth.p).norm());
         rec.rdpop_faulty.push(rd);
@@ -652,6 +669,7 @@ pub fn run_case(world: &World, cfg: &SimConfig, env: &Environment, kind: FaultTy
             fault: faulty.then_some(fault),
             fdsr: FdsrConfig { strategy, alpha: 0.001, eta },
             seed,
+            gan: None,
         };
         runs.push((name.to_string(), run(&spec)?));
     }
@@ -713,6 +731,7 @@ mod tests {
                 fault: None,
                 fdsr: FdsrConfig { strategy: Strategy::None, alpha: 0.001, eta: 0.1 },
                 seed: 100 + seed,
+                gan: None,
             };
             let r = run(&spec).unwrap();
             if sum.is_empty() {

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use super::constellation::{Constellation, Site};
 use super::fdi::{Action, FdsrConfig, FilterPredictor, RangePredictor, Reconfigurator, Strategy};
+use super::gan_fdsr::GanDetectorModel;
 use super::tc_ekf::{EkfConfig, NavState, PrMeas, TcEkf};
 use super::TightError;
 
@@ -76,6 +77,9 @@ pub struct TightConfig {
     /// Constellation time at row time 0, s (satellite positions come from
     /// the almanac at `t0 + t`).
     pub t0: f64,
+    /// Detection and reconfiguration: `none`, `fdi`, `fda`, `switch` or
+    /// `gan` (GAN-FDSR); `method` is accepted as another name.
+    #[serde(alias = "method")]
     pub strategy: Strategy,
     /// False-alarm rate α of the λ test.
     pub alpha: f64,
@@ -134,6 +138,10 @@ pub struct EpochOutput {
     /// RDPOP of the flagged satellite.
     pub rdpop: Option<f64>,
     pub action: Option<Action>,
+    /// GAN-FDSR only: the largest GAN score of the epoch (T2 is the model's
+    /// threshold); `None` for other strategies or while windows fill.
+    #[serde(default)]
+    pub gan_score_max: Option<f64>,
     /// Pseudo-ranges at this row.
     pub n_sats: usize,
     /// Estimated position (NED, m), velocity (NED, m/s), clock bias (m).
@@ -173,6 +181,16 @@ impl TightDetector {
             d.ekf = Some(d.filter_from(&init)?);
             d.last_t = Some(init.t);
         }
+        Ok(d)
+    }
+
+    /// GAN-FDSR with a given model (e.g. trained by `tightGanTrain`) in place
+    /// of the embedded default; `cfg.strategy` is set to `gan`.
+    pub fn with_gan(mut cfg: TightConfig, model: GanDetectorModel) -> Result<Self, TightError> {
+        cfg.strategy = Strategy::Gan;
+        let mut d = Self::with_predictor(TightConfig { strategy: Strategy::Fdi, ..cfg.clone() }, Box::new(FilterPredictor::new(1.0)))?;
+        d.fdsr = Reconfigurator::with_gan(FdsrConfig { strategy: Strategy::Gan, alpha: cfg.alpha, eta: cfg.eta }, model)?;
+        d.cfg = cfg;
         Ok(d)
     }
 
@@ -267,6 +285,7 @@ impl TightDetector {
                 lambda_max: 0.0,
                 rdpop: None,
                 action: None,
+                gan_score_max: None,
                 n_sats: meas.len(),
                 position_ned: [f64::NAN; 3],
                 velocity_ned: [f64::NAN; 3],
@@ -287,6 +306,7 @@ impl TightDetector {
         out.lambda_max = d.lambda_max;
         out.rdpop = d.rdpop;
         out.action = Some(d.action);
+        out.gan_score_max = d.gan_scores.iter().map(|x| x.1).filter(|x| x.is_finite()).fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.max(x))));
         Ok(out)
     }
 
@@ -309,6 +329,7 @@ fn output(t: f64, status: Status, ekf: &TcEkf, n_sats: usize) -> EpochOutput {
         lambda_max: 0.0,
         rdpop: None,
         action: None,
+        gan_score_max: None,
         n_sats,
         position_ned: [ekf.x.p[0], ekf.x.p[1], ekf.x.p[2]],
         velocity_ned: [ekf.x.v[0], ekf.x.v[1], ekf.x.v[2]],

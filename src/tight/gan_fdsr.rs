@@ -1,0 +1,465 @@
+//! GAN-FDSR detection and reconstruction per satellite (Shen et al. 2022,
+//! §2.2 and §3.2–3.3): the pseudo-range increment difference ρD (eq. 10) of
+//! each satellite, standardised, reconstructed in phase space (eq. 16) and cut
+//! into the window `y_new` (w phase points × m); the trained GRU GAN scores
+//! it (`Score = λ·Gs + (1 − λ)·(1 − D)`) against T2, and its generator
+//! supplies the increment difference that rebuilds a faulty pseudo-range by
+//! eq. 12.
+//!
+//! ρ_I is the filter's predicted pseudo-range before the update (INS position
+//! and clock), so `ρ_G − ρ_I` is the innovation `v` and `ρD_k = v_k − v_{k−1}`.
+
+use std::collections::{BTreeMap, VecDeque};
+
+use serde::{Deserialize, Serialize};
+
+use super::chaos::{analyze, embed, ChaosIndices, ChaosOptions};
+use super::fdi::{FdsrConfig, Reconstruction, Strategy};
+use super::gan::{subsequences, train as train_gan, GanConfig, GanModel, GanScratch, Score, Threshold, TrainProgress};
+use super::scenario::{run, RunSpec, SimConfig, World};
+use super::TightError;
+
+/// The per-satellite series the GAN sees.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GanInput {
+    /// The paper's ρD (eq. 10), m: a step shows only at its onset and a
+    /// ramp only as a small mean shift.
+    IncrementDifference,
+    /// The normalised innovation λ (eq. A2) itself: a step or a ramp shifts
+    /// its level for as long as it lasts (our variant).
+    Innovation,
+}
+
+impl GanInput {
+    pub fn name(self) -> &'static str {
+        match self {
+            GanInput::IncrementDifference => "rhoD",
+            GanInput::Innovation => "lambda",
+        }
+    }
+}
+
+/// A trained detector: the GAN plus the pre-processing it was trained with.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct GanDetectorModel {
+    /// Which series the GAN was trained on.
+    pub input: GanInput,
+    /// Delay τ of the phase-space reconstruction, epochs.
+    pub tau: usize,
+    /// Embedding dimension m (the GAN's feature count).
+    pub m: usize,
+    /// Mean and standard deviation of the series on the fault-free training
+    /// data (m for ρD, unitless for λ).
+    pub mean: f64,
+    pub scale: f64,
+    /// RMS of `y − G(z_k)` per element on the training windows (standardised
+    /// units): the error of one generated increment difference.
+    pub gen_rms: f64,
+    /// The GAN, its λ and its threshold T2.
+    pub gan: GanModel,
+    /// How the model was made (command line, seeds), for reports.
+    pub provenance: String,
+}
+
+const MAGIC: &[u8; 8] = b"NGGANFD1";
+
+impl GanDetectorModel {
+    /// ρD samples one window needs: `w + (m − 1)·τ`.
+    pub fn span(&self) -> usize {
+        self.gan.config().window + (self.m - 1) * self.tau
+    }
+
+    /// The window `y_new` (w × m, row-major, time-major) from the last
+    /// [`span`](Self::span) standardised samples, oldest first.
+    pub fn window_into(&self, hist: &VecDeque<f64>, y: &mut Vec<f64>) -> bool {
+        let span = self.span();
+        if hist.len() < span {
+            return false;
+        }
+        let base = hist.len() - span;
+        let w = self.gan.config().window;
+        y.clear();
+        for t in 0..w {
+            for k in 0..self.m {
+                y.push(hist[base + t + k * self.tau]);
+            }
+        }
+        true
+    }
+
+    pub fn to_bytes(&self) -> Result<Vec<u8>, TightError> {
+        let mut out = MAGIC.to_vec();
+        let body = postcard::to_allocvec(self).map_err(|e| TightError::new("gan model", format!("cannot encode: {e}")))?;
+        out.extend_from_slice(&body);
+        Ok(out)
+    }
+
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, TightError> {
+        let body = bytes
+            .strip_prefix(MAGIC.as_slice())
+            .ok_or_else(|| TightError::new("gan model", "not a navguard GAN-FDSR model (bad magic)"))?;
+        let m: GanDetectorModel = postcard::from_bytes(body).map_err(|e| TightError::new("gan model", format!("damaged: {e}")))?;
+        m.check()?;
+        Ok(m)
+    }
+
+    fn check(&self) -> Result<(), TightError> {
+        if self.tau == 0 || self.m == 0 || self.m != self.gan.config().dim {
+            return Err(TightError::new("gan model", format!("tau {} / m {} do not match the GAN (dim {})", self.tau, self.m, self.gan.config().dim)));
+        }
+        if !(self.scale.is_finite() && self.scale > 0.0 && self.mean.is_finite() && self.gen_rms.is_finite() && self.gen_rms >= 0.0) {
+            return Err(TightError::new("gan model", format!("bad normalisation: mean {}, scale {}, gen_rms {}", self.mean, self.scale, self.gen_rms)));
+        }
+        Ok(())
+    }
+}
+
+/// The default model, trained by `cargo run --release --bin navguard-tight -- gan-train`
+/// (see `docs/tight.md`) and embedded in the library.
+pub fn default_model() -> Result<GanDetectorModel, TightError> {
+    let bytes = include_bytes!("gan_default.bin");
+    if bytes.is_empty() {
+        return Err(TightError::new("strategy", "no GAN-FDSR model is embedded in this build (run `navguard-gan train`)"));
+    }
+    GanDetectorModel::from_bytes(bytes)
+}
+
+/// Per-satellite state.
+#[derive(Clone, Debug, Default)]
+struct Sat {
+    /// Time (s) and innovation (m) of the last epoch the satellite was seen.
+    last: Option<(f64, f64)>,
+    /// Standardised ρD history, newest last (at most `span` long).
+    hist: VecDeque<f64>,
+    /// z_k of the last search, the warm start of the next one.
+    z: Option<Vec<f64>>,
+    /// Healthy innovations, the base of a reconstruction (newest last).
+    healthy_v: VecDeque<f64>,
+    /// Under repair: offset `ρ̂_G − ρ_I` (m), its variance (m²) and the
+    /// generated innovation of the λ input (m), eq. 12.
+    repair: Option<(f64, f64, f64)>,
+}
+
+/// One satellite's result at an epoch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SatScore {
+    pub prn: u8,
+    /// Score of eq. (Score), or NaN while the window is filling.
+    pub score: f64,
+    /// Generated increment difference of the newest sample, m.
+    pub generated: f64,
+}
+
+/// Runs the GAN detection function over every satellite of each epoch.
+pub struct GanMonitor {
+    pub model: GanDetectorModel,
+    /// Longest gap (s) that keeps a satellite's ρD history.
+    pub max_gap: f64,
+    sats: BTreeMap<u8, Sat>,
+    y: Vec<f64>,
+    scratch: GanScratch,
+}
+
+/// Healthy innovations averaged into a reconstruction's starting offset: the
+/// mean of the last few damps their white noise.
+const BASE_EPOCHS: usize = 5;
+
+impl GanMonitor {
+    pub fn new(model: GanDetectorModel) -> Self {
+        GanMonitor { model, max_gap: 1.5, sats: BTreeMap::new(), y: Vec::new(), scratch: GanScratch::default() }
+    }
+
+    /// Detection threshold T2.
+    pub fn t2(&self) -> f64 {
+        self.model.gan.t2()
+    }
+
+    /// Feed the epoch's innovations `v_i = ρ_G − ρ_I` (m) at time `t` (s) and
+    /// score every satellite whose window is full. Satellites under repair
+    /// get the generated increment difference in their history in place of
+    /// the measured one, so the generator keeps a fault-free context.
+    /// `lam`: the normalised innovations λ of the same satellites, and `sd`
+    /// the standard deviation of each predicted pseudo-range's innovation
+    /// (√P_v,ii, m), used by the λ input.
+    pub fn epoch(&mut self, t: f64, prns: &[u8], v: &[f64], lam: &[f64], sd: &[f64]) -> Result<Vec<SatScore>, TightError> {
+        let model = &self.model;
+        let span = model.span();
+        let mut out = Vec::with_capacity(prns.len());
+        self.sats.retain(|p, s| prns.contains(p) || s.last.is_some_and(|(lt, _)| t - lt <= self.max_gap));
+        for (k, (&prn, &vi)) in prns.iter().zip(v).enumerate() {
+            let s = self.sats.entry(prn).or_default();
+            let rd = match s.last {
+                Some((lt, lv)) if t - lt <= self.max_gap && t > lt => Some(match model.input {
+                    GanInput::IncrementDifference => vi - lv,
+                    GanInput::Innovation => lam.get(k).copied().unwrap_or(f64::NAN),
+                }),
+                _ => {
+                    s.hist.clear();
+                    s.z = None;
+                    None
+                }
+            };
+            s.last = Some((t, vi));
+            let Some(rd) = rd.filter(|x| x.is_finite()) else {
+                out.push(SatScore { prn, score: f64::NAN, generated: f64::NAN });
+                continue;
+            };
+            s.hist.push_back((rd - model.mean) / model.scale);
+            while s.hist.len() > span {
+                s.hist.pop_front();
+            }
+            if !model.window_into(&s.hist, &mut self.y) {
+                out.push(SatScore { prn, score: f64::NAN, generated: f64::NAN });
+                continue;
+            }
+            let sc: Score = model.gan.score_with(&self.y, s.z.as_deref(), &mut self.scratch)?;
+            let gen_std = sc.generated.last().copied().unwrap_or(0.0).clamp(-4.0, 4.0);
+            let generated = model.mean + model.scale * gen_std;
+            // Next epoch's window is this one shifted by one phase point:
+            // shift z the same way as the warm start.
+            s.z = Some(model.gan.shift_latent(&sc.z, 1)?);
+            if let Some((off, var, gen)) = s.repair.as_mut() {
+                match model.input {
+                    // eq. 12: ρ̂_G(k) − ρ_I(k) = ρ̂_G(k−1) − ρ_I(k−1) + ρD_G(k).
+                    GanInput::IncrementDifference => {
+                        *off += generated;
+                        let g = model.gen_rms * model.scale;
+                        *var += g * g;
+                    }
+                    // The generated innovation, in metres, on top of the
+                    // healthy offset.
+                    GanInput::Innovation => {
+                        *gen = generated * sd.get(k).copied().unwrap_or(0.0);
+                    }
+                }
+                if let Some(last) = s.hist.back_mut() {
+                    *last = gen_std;
+                }
+            }
+            out.push(SatScore { prn, score: sc.score, generated });
+        }
+        Ok(out)
+    }
+
+    /// A measurement accepted as healthy: its innovation (m) is a base for
+    /// later reconstructions.
+    pub fn healthy(&mut self, prn: u8, v: f64) {
+        if let Some(s) = self.sats.get_mut(&prn) {
+            s.healthy_v.push_back(v);
+            while s.healthy_v.len() > BASE_EPOCHS {
+                s.healthy_v.pop_front();
+            }
+            s.repair = None;
+        }
+    }
+
+    /// Start rebuilding `prn` from its healthy history (R: the measurement
+    /// variance, m²). False when there is no healthy history.
+    pub fn start_repair(&mut self, prn: u8, r: f64) -> bool {
+        let Some(s) = self.sats.get_mut(&prn) else { return false };
+        if s.repair.is_some() {
+            return true;
+        }
+        if s.healthy_v.is_empty() {
+            return false;
+        }
+        let n = s.healthy_v.len() as f64;
+        let off = s.healthy_v.iter().sum::<f64>() / n;
+        s.repair = Some((off, r / n, 0.0));
+        true
+    }
+
+    pub fn end_repair(&mut self, prn: u8) {
+        if let Some(s) = self.sats.get_mut(&prn) {
+            s.repair = None;
+        }
+    }
+
+    /// The rebuilt pseudo-range of a satellite under repair, given the
+    /// filter's predicted one (m).
+    pub fn reconstruct(&self, prn: u8, predicted: f64) -> Option<Reconstruction> {
+        let (off, var, gen) = self.sats.get(&prn)?.repair?;
+        Some(Reconstruction { pr: predicted + off + gen, variance: var })
+    }
+}
+
+/// Training settings for [`train_detector`].
+#[derive(Clone, Debug)]
+pub struct GanTrainOptions {
+    /// Seeds of the fault-free flights the GAN learns from.
+    pub train_seeds: Vec<u64>,
+    /// Seeds of other fault-free flights that set T2.
+    pub calib_seeds: Vec<u64>,
+    pub gan: GanConfig,
+    pub input: GanInput,
+    /// False-alarm rate α of T2.
+    pub alpha: f64,
+    /// Filter settling time left out of every series, s.
+    pub skip_s: f64,
+    /// Largest delay and embedding dimension searched.
+    pub max_tau: usize,
+    pub max_m: usize,
+}
+
+impl Default for GanTrainOptions {
+    fn default() -> Self {
+        GanTrainOptions {
+            train_seeds: (101..=106).collect(),
+            calib_seeds: (201..=206).collect(),
+            gan: GanConfig::default(),
+            input: GanInput::Innovation,
+            alpha: 0.001,
+            skip_s: 30.0,
+            max_tau: 20,
+            max_m: 9,
+        }
+    }
+}
+
+/// What training found and did.
+#[derive(Clone, Debug)]
+pub struct GanTrainReport {
+    /// Chaos indices of every satellite of the first training flight (Table 1).
+    pub chaos: Vec<(String, ChaosIndices)>,
+    pub tau: usize,
+    pub m: usize,
+    pub train_windows: usize,
+    pub calib_windows: usize,
+    pub threshold: Threshold,
+}
+
+/// The input series (ρD in m, or λ) of every tracked satellite of a
+/// fault-free flight with no detection, after `skip_s` seconds of settling.
+pub fn input_series(world: &World, sim: &SimConfig, prns: &[u8], seed: u64, skip_s: f64, input: GanInput) -> Result<Vec<(u8, Vec<f64>)>, TightError> {
+    let spec = RunSpec {
+        world,
+        cfg: sim,
+        prns,
+        watch_prn: prns.first().copied().unwrap_or(0),
+        fault: None,
+        fdsr: FdsrConfig { strategy: Strategy::None, alpha: 0.001, eta: 0.1 },
+        seed,
+        gan: None,
+    };
+    let rec = run(&spec)?;
+    let mut series: BTreeMap<u8, (Vec<f64>, Option<f64>)> = BTreeMap::new();
+    for (k, ep) in rec.ranges.iter().enumerate() {
+        let t = rec.t.get(k).copied().unwrap_or(0.0);
+        let seen: Vec<u8> = ep.iter().map(|x| x.0).collect();
+        for s in series.iter_mut().filter(|(p, _)| !seen.contains(p)) {
+            s.1 .1 = None;
+        }
+        let lams = rec.lambdas.get(k);
+        for (j, &(prn, g, i)) in ep.iter().enumerate() {
+            let e = series.entry(prn).or_insert((Vec::new(), None));
+            let v = g - i;
+            if let Some(lv) = e.1 {
+                if t >= skip_s {
+                    let x = match input {
+                        GanInput::IncrementDifference => v - lv,
+                        GanInput::Innovation => lams.and_then(|l| l.get(j)).copied().unwrap_or(f64::NAN),
+                    };
+                    if x.is_finite() {
+                        e.0.push(x);
+                    }
+                }
+            }
+            e.1 = Some(v);
+        }
+    }
+    Ok(series.into_iter().map(|(p, (s, _))| (p, s)).collect())
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
+}
+
+/// Train the GAN-FDSR detector on fault-free simulated flights over `prns`:
+/// chaos analysis picks τ (mutual information) and m (Cao) as the medians
+/// over the satellites, ρD is standardised, embedded and windowed, the GAN is
+/// trained and T2 set on held-out flights at false-alarm rate α.
+pub fn train_detector(
+    world: &World,
+    sim: &SimConfig,
+    prns: &[u8],
+    opts: &GanTrainOptions,
+    progress: &mut dyn FnMut(&TrainProgress) -> bool,
+) -> Result<(GanDetectorModel, GanTrainReport), TightError> {
+    if opts.train_seeds.is_empty() || opts.calib_seeds.is_empty() {
+        return Err(TightError::new("seeds", "need at least one training and one calibration seed"));
+    }
+    let mut train = Vec::new();
+    for &s in &opts.train_seeds {
+        train.extend(input_series(world, sim, prns, s, opts.skip_s, opts.input)?);
+    }
+    let mut calib = Vec::new();
+    for &s in &opts.calib_seeds {
+        calib.extend(input_series(world, sim, prns, s, opts.skip_s, opts.input)?);
+    }
+    // Chaos indices on the first flight's satellites (Table 1).
+    let dt = 1.0 / sim.gnss_rate;
+    let mut chaos = Vec::new();
+    let n_first = input_series(world, sim, prns, opts.train_seeds[0], opts.skip_s, opts.input)?.len();
+    for (prn, r) in train.iter().take(n_first) {
+        let c = analyze(r, dt, &ChaosOptions { max_tau: opts.max_tau, max_m: opts.max_m, ..ChaosOptions::default() })?;
+        chaos.push((format!("G{prn}"), c));
+    }
+    let mut taus: Vec<f64> = chaos.iter().map(|c| c.1.tau as f64).collect();
+    let mut ms: Vec<f64> = chaos.iter().map(|c| c.1.m as f64).collect();
+    let tau = (libm::round(median(&mut taus)) as usize).clamp(1, opts.max_tau);
+    let m = (libm::round(median(&mut ms)) as usize).clamp(2, opts.max_m);
+
+    let all: Vec<f64> = train.iter().flat_map(|s| s.1.iter().copied()).collect();
+    let n = all.len() as f64;
+    let mean = all.iter().sum::<f64>() / n;
+    let scale = libm::sqrt(all.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0).max(1.0));
+    let mut cfg = opts.gan.clone();
+    cfg.dim = m;
+    cfg.check()?;
+    let windows = |set: &[(u8, Vec<f64>)], step: usize| -> Result<Vec<Vec<f64>>, TightError> {
+        let mut out = Vec::new();
+        for (_, r) in set {
+            let z: Vec<f64> = r.iter().map(|x| (x - mean) / scale).collect();
+            if z.len() < cfg.window + (m - 1) * tau {
+                continue;
+            }
+            let ps = embed(&z, m, tau)?;
+            out.extend(subsequences(&ps.data, m, cfg.window, step)?);
+        }
+        Ok(out)
+    };
+    let train_w = windows(&train, cfg.step)?;
+    let calib_w = windows(&calib, 1)?;
+    let mut gan = train_gan(&train_w, &cfg, progress)?;
+    let threshold = gan.calibrate(&calib_w, opts.alpha)?;
+    // Generation error of the newest element (what eq. 12 accumulates).
+    let mut se = 0.0;
+    let mut k = 0usize;
+    for y in calib_w.iter().step_by((calib_w.len() / 400).max(1)) {
+        let s = gan.score(y, None)?;
+        if let (Some(a), Some(b)) = (y.last(), s.generated.last()) {
+            se += (a - b) * (a - b);
+            k += 1;
+        }
+    }
+    let gen_rms = libm::sqrt(se / (k.max(1) as f64));
+    let provenance = format!(
+        "navguard-gan train ({} input): {} fault-free flights (seeds {:?}) over satellites {:?}, T2 from seeds {:?}; tau {tau}, m {m}; {:?}",
+        opts.input.name(),
+        opts.train_seeds.len(),
+        opts.train_seeds,
+        prns,
+        opts.calib_seeds,
+        cfg
+    );
+    let model = GanDetectorModel { input: opts.input, tau, m, mean, scale, gen_rms, gan, provenance };
+    model.check()?;
+    let report = GanTrainReport { chaos, tau, m, train_windows: train_w.len(), calib_windows: calib_w.len(), threshold };
+    Ok((model, report))
+}
