@@ -168,3 +168,91 @@ fn gradual_faults_are_detected_late_in_good_geometry() {
     assert!(d05 > d1 && d03 > d05, "delays {d1} {d05} {d03}");
     assert!(d03 < 60.0, "0.3 m/s ramp never detected");
 }
+
+fn gan_run(world: &World, cfg: &SimConfig, env: &Environment, kind: Option<FaultType>, seed: u64) -> navguard::tight::scenario::RunRecord {
+    let spec = RunSpec {
+        world,
+        cfg,
+        prns: &env.prns,
+        watch_prn: env.faulty_prn,
+        fault: kind.map(|kind| FaultSpec { prn: env.faulty_prn, kind, start: 300.0, end: 360.0 }),
+        fdsr: FdsrConfig { strategy: Strategy::Gan, alpha: 0.001, eta: 0.035 },
+        seed,
+        gan: None,
+    };
+    run(&spec).unwrap()
+}
+
+/// GAN-FDSR (embedded model) in Env 1: a 20 m step is flagged within 2 s and
+/// kept out by the repair test; a 10 m step, which FDI lets in most of the
+/// time, is flagged most of the section; nothing else is blamed.
+#[test]
+fn gan_fdsr_flags_steps_and_names_the_satellite() {
+    let (cfg, world, envs) = setup();
+    let env = &envs[0];
+    for seed in [3, 4] {
+        let r = gan_run(&world, &cfg, env, Some(FaultType::Step20), seed);
+        let d = r.detection_delay(env.faulty_prn, 300.0, 360.0);
+        assert!(d.is_some_and(|d| d <= 2.0), "seed {seed}: 20 m step delay {d:?}");
+        assert!(r.flag_rate(env.faulty_prn, 300.0, 360.0) >= 0.9, "seed {seed}: flag rate {}", r.flag_rate(env.faulty_prn, 300.0, 360.0));
+        assert_eq!(r.wrong_flags(env.faulty_prn, 300.0, 360.0), 0);
+        let r = gan_run(&world, &cfg, env, Some(FaultType::Step10), seed);
+        assert!(r.flag_rate(env.faulty_prn, 300.0, 360.0) >= 0.5, "seed {seed}: 10 m flag rate {}", r.flag_rate(env.faulty_prn, 300.0, 360.0));
+    }
+}
+
+/// Ramps are caught, faster ones sooner; fault-free flights stay near α.
+#[test]
+fn gan_fdsr_detects_ramps_and_stays_quiet_when_fault_free() {
+    let (cfg, world, envs) = setup();
+    let env = &envs[0];
+    let delay = |kind| {
+        let d: Vec<f64> = [1, 2, 3].iter().map(|&s| gan_run(&world, &cfg, env, Some(kind), s).detection_delay(env.faulty_prn, 300.0, 360.0).unwrap_or(60.0)).collect();
+        d.iter().sum::<f64>() / d.len() as f64
+    };
+    let (d1, d03) = (delay(FaultType::Ramp1), delay(FaultType::Ramp03));
+    assert!(d1 <= 20.0, "1 m/s ramp delay {d1}");
+    assert!(d03 > d1 && d03 < 45.0, "0.3 m/s ramp delay {d03} (1 m/s: {d1})");
+    let (mut flagged, mut tests) = (0usize, 0usize);
+    for seed in [5, 6] {
+        let r = gan_run(&world, &cfg, env, None, seed);
+        for i in (0..r.t.len()).filter(|&i| r.t[i] >= 30.0) {
+            flagged += usize::from(r.flagged_prn[i] != 0);
+            tests += r.ranges[i].len();
+        }
+    }
+    // α = 0.001 per satellite-epoch: ~6 expected false alarms in these ~6,900 tests.
+    assert!((flagged as f64) / (tests as f64) < 0.003, "{flagged} false alarms in {tests} satellite-epochs");
+}
+
+/// The streaming detector with `method: "gan"` (rows through the CSV format)
+/// flags the step within 2 s and names no other satellite during it.
+#[test]
+fn gan_fdsr_streams_through_the_detector() {
+    let (cfg, world, envs) = setup();
+    let env = &envs[0];
+    let fault = FaultSpec { prn: env.faulty_prn, kind: FaultType::Step20, start: env.fault_start, end: env.fault_end };
+    let spec = RunSpec {
+        world: &world,
+        cfg: &cfg,
+        prns: &env.prns,
+        watch_prn: env.faulty_prn,
+        fault: Some(fault),
+        fdsr: FdsrConfig { strategy: Strategy::Gan, alpha: 0.001, eta: 0.035 },
+        seed: 7,
+        gan: None,
+    };
+    let (_, rows, init) = run_with_rows(&spec).unwrap();
+    let rows = parse_csv(&to_csv(&rows)).unwrap();
+    let mut tc: TightConfig = serde_json::from_str(r#"{"method": "gan"}"#).unwrap();
+    assert_eq!(tc.strategy, Strategy::Gan);
+    tc.t0 = world.t0;
+    tc.initial = Some(init);
+    let out = TightDetector::new(tc).unwrap().run(&rows).unwrap();
+    let during: Vec<_> = out.iter().filter(|o| o.t >= fault.start && o.t < fault.end && o.status != Status::NoGnss).collect();
+    let first = during.iter().find(|o| o.status == Status::Fault).map(|o| o.t - fault.start);
+    assert!(first.is_some_and(|d| d <= 2.0), "first flag {first:?} s after onset");
+    assert!(during.iter().all(|o| o.faulty_prn.is_none() || o.faulty_prn == Some(env.faulty_prn)));
+    assert!(during.iter().filter(|o| o.faulty_prn == Some(env.faulty_prn)).count() as f64 >= 0.9 * during.len() as f64);
+    assert!(out.iter().filter(|o| o.t > 60.0 && o.status == Status::Ok).all(|o| o.gan_score_max.is_some_and(f64::is_finite)));
+}

@@ -207,6 +207,47 @@ fn every_method_streams_and_catches_a_step() {
     }
 }
 
+/// GAN-FDSR through the facade: the simulated Env 1 flight with a 20 m step
+/// on one satellite, `method: "gan"` on the tightly coupled detector; the
+/// step is flagged within 2 s, only that satellite is named, and a model
+/// trained in wasm (`tightGanTrain`, 1 epoch) plugs in and runs the flight.
+#[wasm_bindgen_test]
+fn gan_fdsr_streams_and_names_the_stepped_satellite() {
+    use navguard::wasm::{tight_gan_train, tight_simulate, TightDetectorJs};
+    let sim = tight_simulate(1, 1, 7.0).unwrap();
+    let cfg = get(&sim, "config");
+    Reflect::set(&cfg, &"method".into(), &"gan".into()).unwrap();
+    let csv = get(&sim, "csv").as_string().unwrap();
+    let prn = get(&sim, "faultyPrn").as_f64().unwrap();
+    let (start, end) = (get(&sim, "faultStart").as_f64().unwrap(), get(&sim, "faultEnd").as_f64().unwrap());
+    let check = |mut det: TightDetectorJs, min_rate: f64| {
+        let out: js_sys::Array = det.push_csv(&csv).unwrap().dyn_into().unwrap();
+        let (mut first, mut named, mut n) = (None, 0usize, 0usize);
+        for o in out.iter() {
+            let t = get(&o, "t").as_f64().unwrap();
+            let status = get(&o, "status").as_string().unwrap();
+            if t < start || t >= end || status == "no-gnss" {
+                continue;
+            }
+            n += 1;
+            if let Some(p) = get(&o, "faulty_prn").as_f64() {
+                assert_eq!(p, prn, "another satellite named at t {t}");
+                named += 1;
+                first.get_or_insert(t - start);
+            }
+        }
+        assert!(first.is_some_and(|d| d <= 2.0), "first flag {first:?} s after onset");
+        assert!(named as f64 >= min_rate * n as f64, "flagged {named} of {n} fault epochs");
+    };
+    check(TightDetectorJs::new(cfg.clone()).unwrap(), 0.9);
+    let opts = Object::new();
+    Reflect::set(&opts, &"epochs".into(), &1.0.into()).unwrap();
+    let trained = tight_gan_train(opts.into(), JsValue::UNDEFINED).unwrap();
+    let bytes = get(&trained, "model").dyn_into::<Uint8Array>().unwrap().to_vec();
+    assert!(get(&trained, "t2").as_f64().is_some_and(|t| t.is_finite() && t > 0.0));
+    check(TightDetectorJs::with_gan_model(cfg, &bytes).unwrap(), 0.5);
+}
+
 fn web_sys_log(s: &str) {
     wasm_bindgen_test::console_log!("{}", s);
 }

@@ -64,11 +64,12 @@ fn train(mut args: impl Iterator<Item = String>) -> Result<(), String> {
             "--epochs" => opts.gan.epochs = num(&mut args, "--epochs")?,
             "--hidden" => opts.gan.hidden = num(&mut args, "--hidden")?,
             "--window" => opts.gan.window = num(&mut args, "--window")?,
+            "--no-lambda-test" => opts.lambda_test = false,
             "--z-iters" => opts.gan.z_iters = num(&mut args, "--z-iters")?,
             "--input" => {
-                opts.input = match args.next().as_deref() {
-                    Some("rhod") => GanInput::IncrementDifference,
-                    Some("lambda") => GanInput::Innovation,
+                (opts.input, opts.lambda_test) = match args.next().as_deref() {
+                    Some("rhod") => (GanInput::IncrementDifference, false),
+                    Some("lambda") => (GanInput::Innovation, true),
                     x => return Err(format!("--input: rhod or lambda, got {x:?}")),
                 }
             }

@@ -524,10 +524,14 @@ fn epoch_gan(
             .enumerate()
             .filter(|(_, s)| s.score > t2 && !under_repair.contains_key(&s.prn))
             .max_by(|a, b| a.1.score.total_cmp(&b.1.score));
-        if let Some((i, s)) = best {
-            det = Some(Detection { index: i, prn: s.prn, lambda: s.score });
-            if gan.start_repair(s.prn, lin.r[(i, i)]) {
-                under_repair.entry(s.prn).or_insert(t);
+        det = best.map(|(i, s)| Detection { index: i, prn: s.prn, lambda: s.score });
+        if det.is_none() && gan.model.lambda_test {
+            let lam = DVector::from_iterator(out.lambdas.len(), out.lambdas.iter().map(|x| x.1));
+            det = detect(&lam, &lin.prns, t1);
+        }
+        if let Some(d) = det {
+            if gan.start_repair(d.prn, lin.r[(d.index, d.index)]) {
+                under_repair.entry(d.prn).or_insert(t);
             }
         }
     }

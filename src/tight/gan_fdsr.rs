@@ -45,6 +45,12 @@ impl GanInput {
 pub struct GanDetectorModel {
     /// Which series the GAN was trained on.
     pub input: GanInput,
+    /// Also flag a satellite whose |λ| exceeds T1 (the Appendix A test),
+    /// with T2 set at α/2 so the two tests share the false-alarm budget α.
+    /// A large step then is flagged at its first epoch, where the windowed
+    /// GAN score needs a few samples.
+    #[serde(default)]
+    pub lambda_test: bool,
     /// Delay τ of the phase-space reconstruction, epochs.
     pub tau: usize,
     /// Embedding dimension m (the GAN's feature count).
@@ -293,7 +299,9 @@ pub struct GanTrainOptions {
     pub calib_seeds: Vec<u64>,
     pub gan: GanConfig,
     pub input: GanInput,
-    /// False-alarm rate α of T2.
+    /// See [`GanDetectorModel::lambda_test`].
+    pub lambda_test: bool,
+    /// False-alarm rate α of the detector (T2 alone, or T2 and T1 together).
     pub alpha: f64,
     /// Filter settling time left out of every series, s.
     pub skip_s: f64,
@@ -307,8 +315,12 @@ impl Default for GanTrainOptions {
         GanTrainOptions {
             train_seeds: (101..=106).collect(),
             calib_seeds: (201..=206).collect(),
-            gan: GanConfig::default(),
+            // 20 epochs: the losses settle by then (D(real) ≈ D(fake) ≈ 0.5);
+            // 10 warm-started latent steps per epoch and satellite keep
+            // inference at a few ms per GNSS epoch.
+            gan: GanConfig { epochs: 20, z_iters: 10, ..GanConfig::default() },
             input: GanInput::Innovation,
+            lambda_test: true,
             alpha: 0.001,
             skip_s: 30.0,
             max_tau: 20,
@@ -437,7 +449,7 @@ pub fn train_detector(
     let train_w = windows(&train, cfg.step)?;
     let calib_w = windows(&calib, 1)?;
     let mut gan = train_gan(&train_w, &cfg, progress)?;
-    let threshold = gan.calibrate(&calib_w, opts.alpha)?;
+    let threshold = gan.calibrate(&calib_w, if opts.lambda_test { opts.alpha / 2.0 } else { opts.alpha })?;
     // Generation error of the newest element (what eq. 12 accumulates).
     let mut se = 0.0;
     let mut k = 0usize;
@@ -450,16 +462,104 @@ pub fn train_detector(
     }
     let gen_rms = libm::sqrt(se / (k.max(1) as f64));
     let provenance = format!(
-        "navguard-gan train ({} input): {} fault-free flights (seeds {:?}) over satellites {:?}, T2 from seeds {:?}; tau {tau}, m {m}; {:?}",
+        "navguard-gan train ({} input, lambda test {}): {} fault-free flights (seeds {:?}) over satellites {:?}, T2 from seeds {:?}; tau {tau}, m {m}; {:?}",
         opts.input.name(),
+        opts.lambda_test,
         opts.train_seeds.len(),
         opts.train_seeds,
         prns,
         opts.calib_seeds,
         cfg
     );
-    let model = GanDetectorModel { input: opts.input, tau, m, mean, scale, gen_rms, gan, provenance };
+    let model = GanDetectorModel { input: opts.input, lambda_test: opts.lambda_test, tau, m, mean, scale, gen_rms, gan, provenance };
     model.check()?;
     let report = GanTrainReport { chaos, tau, m, train_windows: train_w.len(), calib_windows: calib_w.len(), threshold };
     Ok((model, report))
+}
+
+#[cfg(all(test, not(target_arch = "wasm32")))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_models_load_and_round_trip() {
+        let m = default_model().unwrap();
+        assert_eq!(m.input, GanInput::Innovation);
+        assert!(m.provenance.starts_with("navguard-gan train"), "{}", m.provenance);
+        assert!(m.gan.t2().is_finite() && m.gan.t2() > 0.0);
+        assert!(m.gan.lambda() > 0.0 && m.gan.lambda() < 1.0);
+        let bytes = m.to_bytes().unwrap();
+        let back = GanDetectorModel::from_bytes(&bytes).unwrap();
+        assert_eq!(back.gan, m.gan);
+        assert_eq!((back.tau, back.m, back.mean.to_bits(), back.scale.to_bits()), (m.tau, m.m, m.mean.to_bits(), m.scale.to_bits()));
+        // Damaged bytes are errors, never panics.
+        let e = GanDetectorModel::from_bytes(&bytes[..bytes.len() / 2]).unwrap_err();
+        assert_eq!(e.field, "gan model");
+        let mut bad = bytes.clone();
+        bad[0] ^= 1;
+        assert!(GanDetectorModel::from_bytes(&bad).unwrap_err().message.contains("magic"));
+        assert!(GanDetectorModel::from_bytes(&[]).is_err());
+    }
+
+    #[test]
+    fn window_is_the_phase_space_of_the_last_span_samples() {
+        let mut m = default_model().unwrap();
+        m.tau = 2;
+        let (w, dim) = (m.gan.config().window, m.m);
+        let span = m.span();
+        assert_eq!(span, w + (dim - 1) * 2);
+        // Older samples than the span are ignored.
+        let hist: VecDeque<f64> = (0..span + 3).map(|x| x as f64).collect();
+        let mut y = Vec::new();
+        assert!(m.window_into(&hist, &mut y));
+        assert_eq!(y.len(), w * dim);
+        for t in 0..w {
+            for k in 0..dim {
+                assert_eq!(y[t * dim + k], (3 + t + 2 * k) as f64, "t {t} k {k}");
+            }
+        }
+        // The newest sample is the last coordinate of the last phase point.
+        assert_eq!(*y.last().unwrap(), (span + 2) as f64);
+        let short: VecDeque<f64> = (0..span - 1).map(|x| x as f64).collect();
+        assert!(!m.window_into(&short, &mut y));
+    }
+
+    /// A satellite that keeps a 4σ offset is scored above T2 once its window
+    /// is full; clean satellites stay below; a gap restarts the window.
+    #[test]
+    fn monitor_scores_a_level_shift_above_t2() {
+        let model = default_model().unwrap();
+        let span = model.span();
+        let mut mon = GanMonitor::new(model);
+        let mut rng = crate::sim::Rng::new(5);
+        let mut last = Vec::new();
+        for k in 0..(span + 5) {
+            let lam: Vec<f64> = (0..4).map(|i| rng.normal() + if i == 2 && k > span / 2 { 4.0 } else { 0.0 }).collect();
+            last = mon.epoch(k as f64, &[3, 5, 7, 9], &[0.0; 4], &lam, &[3.0; 4]).unwrap();
+        }
+        let t2 = mon.t2();
+        assert!(last[2].score > t2, "shifted satellite score {} vs T2 {t2}", last[2].score);
+        for i in [0, 1, 3] {
+            assert!(last[i].score.is_finite() && last[i].score < last[2].score, "{:?}", last);
+        }
+        // After a 5 s gap the history restarts: no score until the window refills.
+        let after = mon.epoch((span + 10) as f64, &[3, 5, 7, 9], &[0.0; 4], &[0.0; 4], &[3.0; 4]).unwrap();
+        assert!(after.iter().all(|s| s.score.is_nan()));
+    }
+
+    #[test]
+    fn repair_rebuilds_from_the_healthy_offset() {
+        let mut mon = GanMonitor::new(default_model().unwrap());
+        assert!(!mon.start_repair(4, 9.0), "no history, no repair");
+        mon.epoch(0.0, &[4], &[2.0], &[0.5], &[3.0]).unwrap();
+        for v in [1.0, 2.0, 3.0] {
+            mon.healthy(4, v);
+        }
+        assert!(mon.start_repair(4, 9.0));
+        let r = mon.reconstruct(4, 1000.0).unwrap();
+        // Mean healthy innovation 2 m on top of the predicted range; variance R/n.
+        assert!((r.pr - 1002.0).abs() < 1e-12 && (r.variance - 3.0).abs() < 1e-12, "{r:?}");
+        mon.end_repair(4);
+        assert!(mon.reconstruct(4, 1000.0).is_none());
+    }
 }
