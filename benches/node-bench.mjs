@@ -61,6 +61,19 @@ const snap = sd.snapshot();
 const snapshotMs = best(50, () => sd.snapshot());
 const restoreMs = best(50, () => ng.Detector.restore(snap).free());
 sd.free();
+// GAN-FDSR (tightly coupled, Env 1, 20 m step, 420 GNSS epochs of 9
+// satellites, 8,400 rows): per-epoch inference against FDI, and in-wasm
+// training of the default-size model (2 + 2 flights).
+const tsim = ng.tightSimulate(1, 1, 7);
+const tightRows = (strategy) => best(3, () => new ng.TightDetector({ ...tsim.config, strategy }).pushCsv(tsim.csv));
+const gnssEpochs = 420;
+const fdiMs = tightRows('fdi');
+const ganMs = tightRows('gan');
+const trainEpochs = 5;
+let t = performance.now();
+const trained = ng.tightGanTrain({ epochs: trainEpochs });
+const ganTrainMs = performance.now() - t;
+
 const wasmSize = statSync(join(root, 'pkg', 'navguard_bg.wasm')).size;
 const fmt = (x) => Math.round(x).toLocaleString('en-US');
 console.log(JSON.stringify({
@@ -77,5 +90,10 @@ console.log(JSON.stringify({
   snapshotBytes: snap.length,
   snapshotMs: +snapshotMs.toFixed(3),
   restoreMs: +restoreMs.toFixed(3),
+  tightFdiMsPerGnssEpoch: +(fdiMs / gnssEpochs).toFixed(3),
+  tightGanMsPerGnssEpoch: +(ganMs / gnssEpochs).toFixed(3),
+  ganTrainMs: Math.round(ganTrainMs),
+  ganTrainEpochs: trainEpochs,
+  ganTrainWindows: trained.trainWindows,
 }, null, 2));
 console.error(`pushColumns ${fmt(n / (noRetrain / 1000))} rows/s, push ${fmt(n / (push / 1000))} rows/s, paper scenario ${whole.toFixed(1)} ms, .wasm ${fmt(wasmSize)} B`);

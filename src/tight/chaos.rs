@@ -831,15 +831,21 @@ pub fn analyze(r: &[f64], dt: f64, opts: &ChaosOptions) -> Result<ChaosIndices, 
 /// (per second, four decimals). `|` in names is escaped.
 pub fn table1_markdown(rows: &[(String, ChaosIndices)]) -> String {
     let mut s = String::from(
-        "| Satellite | τ | m | Largest Lyapunov exponent |\n|---|---:|---:|---:|\n",
+        "| Satellite | τ | m | Largest Lyapunov exponent | Cao E2 (min–max over d) |\n|---|---:|---:|---:|---:|\n",
     );
     for (name, c) in rows {
+        // E2 stays near 1 at every d for a stochastic series (Cao 1997): the
+        // check that a positive exponent alone cannot make.
+        let lo = c.e2.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = c.e2.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         s.push_str(&format!(
-            "| {} | {} | {} | {:.4} |\n",
+            "| {} | {} | {} | {:.4} | {:.2}–{:.2} |\n",
             name.replace('|', "\\|"),
             c.tau,
             c.m,
-            c.lyapunov
+            c.lyapunov,
+            lo,
+            hi
         ));
     }
     s
@@ -1096,7 +1102,8 @@ mod tests {
         let t = table1_markdown(&[("G8".into(), c.clone()), ("a|b".into(), c.clone())]);
         let lines: Vec<&str> = t.lines().collect();
         assert_eq!(lines.len(), 4);
-        assert_eq!(lines[2], format!("| G8 | {} | {} | {:.4} |", c.tau, c.m, c.lyapunov));
+        let (lo, hi) = (c.e2.iter().copied().fold(f64::INFINITY, f64::min), c.e2.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+        assert_eq!(lines[2], format!("| G8 | {} | {} | {:.4} | {lo:.2}–{hi:.2} |", c.tau, c.m, c.lyapunov));
         assert!(lines[3].starts_with("| a\\|b |"));
         assert_eq!(field(analyze(&x, -1.0, &opts).unwrap_err()), "dt");
         let bad = ChaosOptions { lyapunov_fit: Some(0..151), ..opts.clone() };
