@@ -160,7 +160,9 @@ pub struct SatScore {
 /// Runs the GAN detection function over every satellite of each epoch.
 pub struct GanMonitor {
     pub model: GanDetectorModel,
-    /// Longest gap (s) that keeps a satellite's ρD history.
+    /// Longest gap (s) that keeps a satellite's history: one missed epoch
+    /// at the 1 Hz the models are trained on. Below 0.4 Hz the windows never
+    /// fill and only the λ test (if the model has it) runs.
     pub max_gap: f64,
     sats: BTreeMap<u8, Sat>,
     y: Vec<f64>,
@@ -173,7 +175,7 @@ const BASE_EPOCHS: usize = 5;
 
 impl GanMonitor {
     pub fn new(model: GanDetectorModel) -> Self {
-        GanMonitor { model, max_gap: 1.5, sats: BTreeMap::new(), y: Vec::new(), scratch: GanScratch::default() }
+        GanMonitor { model, max_gap: 2.5, sats: BTreeMap::new(), y: Vec::new(), scratch: GanScratch::default() }
     }
 
     /// Detection threshold T2.
