@@ -386,25 +386,9 @@ impl Reconfigurator {
         // predictor; the first one still inconsistent is the detection.
         let mut det = None;
         if cfg.strategy == Strategy::Switch {
-            let mut release = Vec::new();
-            for (&prn, _) in self.under_repair.iter() {
-                let Some(i) = lin.index_of(prn) else {
-                    release.push(prn);
-                    continue;
-                };
-                let pr = lin.predicted[i] + lin.v[i];
-                match self.predictor.reconstruct(t, prn, lin.predicted[i]) {
-                    Some(r) => {
-                        let stat = (pr - r.pr) / libm::sqrt(lin.r[(i, i)] + r.variance);
-                        if stat.abs() > self.t1 && det.is_none() {
-                            det = Some(Detection { index: i, prn, lambda: stat });
-                        } else if stat.abs() <= self.t1 {
-                            release.push(prn);
-                        }
-                    }
-                    None => release.push(prn),
-                }
-            }
+            let predictor = &mut self.predictor;
+            let (d, release) = repair_check(&self.under_repair, &lin, self.t1, |prn, pred| predictor.reconstruct(t, prn, pred));
+            det = d;
             for p in release {
                 self.under_repair.remove(&p);
             }
@@ -440,19 +424,7 @@ impl Reconfigurator {
                         } else {
                             None
                         };
-                        match rec {
-                            Some(r) => {
-                                let mut l = lin.clone();
-                                l.v[d.index] = r.pr - lin.predicted[d.index];
-                                // The filter-prediction predictor carries no
-                                // information beyond the filter's, so the
-                                // predicted-range variance H P Hᵀ is added to
-                                // the predictor's own: less false confidence.
-                                l.r[(d.index, d.index)] = r.variance + (pv[(d.index, d.index)] - lin.r[(d.index, d.index)]).max(0.0);
-                                (l, Action::Reconstruct)
-                            }
-                            None => (lin.without(d.index), Action::Isolate),
-                        }
+                        reconstruct_or_isolate(&lin, &pv, d.index, rec)
                     }
                 }
             }
@@ -462,6 +434,56 @@ impl Reconfigurator {
             out.action = Action::Rejected;
         }
         out
+    }
+}
+
+/// Satellites under repair stay flagged while their pseudo-range disagrees
+/// with the rebuilt one, `|ρ − ρ̂| / √(R + σ̂²) > T1`: the first still
+/// inconsistent one is the epoch's detection; the others that agree (or are
+/// not tracked, or cannot be rebuilt) are returned for release.
+fn repair_check(
+    under_repair: &BTreeMap<u8, f64>,
+    lin: &Linearized,
+    t1: f64,
+    mut rebuild: impl FnMut(u8, f64) -> Option<Reconstruction>,
+) -> (Option<Detection>, Vec<u8>) {
+    let mut det = None;
+    let mut release = Vec::new();
+    for &prn in under_repair.keys() {
+        let Some(i) = lin.index_of(prn) else {
+            release.push(prn);
+            continue;
+        };
+        let pr = lin.predicted[i] + lin.v[i];
+        match rebuild(prn, lin.predicted[i]) {
+            Some(r) => {
+                let stat = (pr - r.pr) / libm::sqrt(lin.r[(i, i)] + r.variance);
+                if stat.abs() > t1 && det.is_none() {
+                    det = Some(Detection { index: i, prn, lambda: stat });
+                } else if stat.abs() <= t1 {
+                    release.push(prn);
+                }
+            }
+            None => release.push(prn),
+        }
+    }
+    (det, release)
+}
+
+/// The measurement set with satellite `i` replaced by `rec`, or without it
+/// when there is no reconstruction.
+fn reconstruct_or_isolate(lin: &Linearized, pv: &DMatrix<f64>, i: usize, rec: Option<Reconstruction>) -> (Linearized, Action) {
+    match rec {
+        Some(r) => {
+            let mut l = lin.clone();
+            l.v[i] = r.pr - lin.predicted[i];
+            // The rebuilt range comes through the filter's own prediction, so
+            // the predicted-range variance H P Hᵀ is added to the predictor's:
+            // less false confidence.
+            l.r[(i, i)] = r.variance + (pv[(i, i)] - lin.r[(i, i)]).max(0.0);
+            (l, Action::Reconstruct)
+        }
+        None => (lin.without(i), Action::Isolate),
     }
 }
 
@@ -493,26 +515,7 @@ fn epoch_gan(
         }
     };
     out.gan_scores = scores.iter().map(|s| (s.prn, s.score)).collect();
-    let mut det = None;
-    let mut release = Vec::new();
-    for &prn in under_repair.keys() {
-        let Some(i) = lin.index_of(prn) else {
-            release.push(prn);
-            continue;
-        };
-        let pr = lin.predicted[i] + lin.v[i];
-        match gan.reconstruct(prn, lin.predicted[i]) {
-            Some(r) => {
-                let stat = (pr - r.pr) / libm::sqrt(lin.r[(i, i)] + r.variance);
-                if stat.abs() > t1 && det.is_none() {
-                    det = Some(Detection { index: i, prn, lambda: stat });
-                } else if stat.abs() <= t1 {
-                    release.push(prn);
-                }
-            }
-            None => release.push(prn),
-        }
-    }
+    let (mut det, release) = repair_check(under_repair, lin, t1, |prn, pred| gan.reconstruct(prn, pred));
     for p in release {
         under_repair.remove(&p);
         gan.end_repair(p);
@@ -546,15 +549,7 @@ fn epoch_gan(
         Some(d) => {
             out.rdpop = rdpop(&ekf.p, lin, d.index);
             let rec = if out.rdpop.is_some_and(|r| r > eta) { gan.reconstruct(d.prn, lin.predicted[d.index]) } else { None };
-            match rec {
-                Some(r) => {
-                    let mut l = lin.clone();
-                    l.v[d.index] = r.pr - lin.predicted[d.index];
-                    l.r[(d.index, d.index)] = r.variance + (pv[(d.index, d.index)] - lin.r[(d.index, d.index)]).max(0.0);
-                    (l, Action::Reconstruct)
-                }
-                None => (lin.without(d.index), Action::Isolate),
-            }
+            reconstruct_or_isolate(lin, pv, d.index, rec)
         }
     };
     out.action = action;
