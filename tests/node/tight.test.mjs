@@ -58,15 +58,14 @@ test('GAN-FDSR (strategy "gan", embedded model) names the 20 m step satellite; m
   const v = stepVerdict(sim, out);
   assert.ok(v.first, 'the step is never flagged');
   assert.equal(v.first.faulty_prn, sim.faultyPrn, `named G${v.first.faulty_prn}, injected G${sim.faultyPrn}`);
-  // Measured: fault at 199 s, first GAN flag at 204 s (seed 7; 3 s with seeds
-  // 1 and 2, 1 s with seed 3). The GAN scores increment windows, so its delay
-  // exceeds FDI's (0 s): 2 s is not met with seed 7; the bound is the measured 5 s.
+  // Measured: flagged at the first faulty epoch with seeds 1, 2, 3 and 7 (the
+  // model's λ test fires at once; the windowed GAN score alone took 1–5 s).
   const delay = v.first.t - sim.faultStart;
-  assert.ok(delay >= 0 && delay <= 5 + 1e-6, `GAN detection delay ${delay} s`);
+  assert.ok(delay >= 0 && delay <= 1 + 1e-6, `GAN-FDSR detection delay ${delay} s`);
   assert.equal(v.otherPrn, 0, 'a flag in the fault section names another satellite');
   assert.equal(v.before, 0, `${v.before} false alarms before the fault`);
-  // Measured 15 of 20 section epochs flagged.
-  assert.ok(v.section >= 10, `${v.section}/${v.sectionEpochs} section epochs flagged`);
+  // Measured 20 of 20 section epochs flagged (the repair test holds the step out).
+  assert.ok(v.section >= 18, `${v.section}/${v.sectionEpochs} section epochs flagged`);
   // The alias gives the same outputs (sim.config names `strategy`, so drop it:
   // both together are a duplicate field).
   const { strategy, ...rest } = sim.config;
@@ -79,8 +78,9 @@ test('GAN-FDSR (strategy "gan", embedded model) names the 20 m step satellite; m
   const late = g.filter((o) => o.t >= g[0].t + 50);
   const finite = late.filter((o) => typeof o.gan_score_max === 'number' && Number.isFinite(o.gan_score_max));
   assert.ok(finite.length >= 0.9 * late.length, `${finite.length}/${late.length} epochs after 50 s have a score`);
-  // A flagged (not under-repair) onset epoch carries its score as the statistic.
-  assert.equal(v.first.statistic, v.first.gan_score_max);
+  // The onset epoch's statistic is the test that fired: the GAN score (above
+  // T2 < 1) or the λ test (|λ| > T1 = 3.29; measured 6.8 with seed 7).
+  assert.ok(v.first.statistic === v.first.gan_score_max || Math.abs(v.first.statistic) > 3.29, `onset statistic ${v.first.statistic}`);
   // Scores are not constant (measured 0.39..1.02) and larger in the section.
   const sMax = Math.max(...finite.map((o) => o.gan_score_max));
   const sMin = Math.min(...finite.map((o) => o.gan_score_max));
@@ -94,7 +94,7 @@ test('GAN-FDSR on the fault-free Env 1 flight: few false alarms', () => {
   const clean = ng.tightSimulate(1, 0, 7);
   const g = gnss(new ng.TightDetector({ ...clean.config, strategy: 'gan' }).pushCsv(clean.csv));
   const flagged = g.filter((o) => o.status === 'fault');
-  // Measured: 1 flagged epoch of 420 with seed 7 (3 to 6 with seeds 1..5).
+  // Measured: 1 flagged epoch of 420 with seed 7 (3 with seeds 1, 2, 3).
   assert.ok(g.length >= 400, `${g.length} GNSS epochs`);
   assert.ok(flagged.length <= 3, `${flagged.length} flagged epochs of ${g.length}: ${flagged.map((o) => `${o.t}:G${o.faulty_prn}`).join(' ')}`);
 });
