@@ -4,12 +4,22 @@
 // |λ| against the threshold T1, RDPOP against η, and a detection summary.
 //
 // The worker protocol (worker.js):
-//   in:  {type:'tight', id, env, faultType, seed, strategy?}
+//   in:  {type:'tight', id, env, faultType, seed, strategy?, ganModel?, ganT2?}
 //   out: {type:'tight-result', id, env, faultType, seed, strategy, alpha, eta,
+//         ganModel ('trained' | 'embedded' | null), ganT2 (trained model's T2),
 //         faultyPrn, faultStart, faultEnd, rows, tEnd, epochs, ms}
 //        {type:'error', id, message}
 // `epochs`: GNSS epochs only, as arrays t, status, prn, lambda (lambda_max),
-// statistic, rdpop, action, nSats (null where not defined).
+// statistic, rdpop, action, nSats, ganScore (gan_score_max) (null where not
+// defined).
+//
+// "Train a GAN in the browser": tightGanTrain is one synchronous wasm call, so
+// it runs in a worker of its own (worker.js again) that Cancel terminates:
+//   in:  {type:'gan-train', id, options}
+//   out: {type:'gan-progress', id, epoch, epochs, dLoss, gLoss, dReal, dFake, ms}
+//        {type:'gan-result', id, model, tau, m, lambda, t2, falseAlarm,
+//         trainWindows, calibWindows, parameters, table1, ms}
+//        {type:'error', id, message}
 import uPlot from './vendor/uPlot.esm.js';
 
 export const FAULT_TYPES = [
@@ -29,7 +39,7 @@ export const ENVIRONMENTS = [
 ];
 
 const SYNC_KEY = 'navguard-tight';
-const COL = { lambda: '#1d4ed8', thr: '#b91c1c', flag: '#dc2626', rdpop: '#7c3aed', eta: '#b45309' };
+const COL = { lambda: '#1d4ed8', thr: '#b91c1c', flag: '#dc2626', rdpop: '#7c3aed', eta: '#b45309', gan: '#0f766e', t2: '#b91c1c' };
 
 /** Inverse of the standard normal CDF (Acklam's rational approximation,
  *  relative error < 1.2e-9), for T1 = N⁻¹(1 − α/2). */
@@ -115,8 +125,39 @@ export function summaryHtml(m, s, t1) {
     row('before', 'False-alarm epochs (whole flight)', String(s.falseAlarmsBefore), s.falseAlarmsBefore ? 'warn' : '');
   }
   row('setup', 'Strategy · T1 · η', `${esc(m.strategy)} · ${fx(t1, 3)} (α ${m.alpha}) · ${m.eta}`);
+  if (m.strategy === 'gan') {
+    const sc = m.epochs.ganScore.filter((v) => v != null);
+    row('gan', 'GAN model · T2 · largest score', `${m.ganModel === 'trained' ? 'trained here' : 'embedded default'} · ${fx(m.ganT2, 3)} · ${sc.length ? fx(Math.max(...sc), 3) : '—'}`);
+  }
   row('epochs', 'GNSS epochs · rows', `${s.epochs} · ${m.rows}`);
   return `<table id="tight-table" class="tight-table"><tbody>${rows.join('')}</tbody></table>`;
+}
+
+/** HTML table of a Markdown pipe table (the chaos Table 1 of tightGanTrain). */
+export function markdownTableHtml(md, id) {
+  const lines = String(md).trim().split('\n').map((l) => l.trim()).filter((l) => l.startsWith('|'));
+  const cells = (l) => l.replace(/^\|/, '').replace(/\|$/, '').split('|').map((c) => c.trim());
+  if (lines.length < 2) return `<pre>${esc(md)}</pre>`;
+  const head = cells(lines[0]);
+  const align = cells(lines[1]).map((c) => c.endsWith(':'));
+  const body = lines.slice(2).map((l) => `<tr>${cells(l).map((c, i) => `<td${align[i] ? ' class="num"' : ''}>${esc(c)}</td>`).join('')}</tr>`);
+  return `<table id="${id}" class="tight-table"><caption>Table 1: chaos analysis of the training flights</caption><thead><tr>${head.map((h, i) => `<th scope="col"${align[i] ? ' class="num"' : ''}>${esc(h)}</th>`).join('')}</tr></thead><tbody>${body.join('')}</tbody></table>`;
+}
+
+/** HTML of a gan-result message: the model's numbers and Table 1. */
+export function ganResultHtml(r) {
+  const rows = [];
+  const row = (key, label, value) => rows.push(`<tr data-key="${key}"><th scope="row">${esc(label)}</th><td class="num">${value}</td></tr>`);
+  row('tau', 'Delay τ (median over satellites)', String(r.tau));
+  row('m', 'Embedding dimension m', String(r.m));
+  row('lambda', 'λ (generation vs discrimination weight)', fx(r.lambda, 4));
+  row('t2', 'Threshold T2', fx(r.t2, 4));
+  row('fa', 'Calibration false-alarm rate', `${fx(100 * r.falseAlarm, 3)} %`);
+  row('params', 'Parameters (G + D)', String(r.parameters));
+  row('windows', 'Training · calibration windows', `${r.trainWindows} · ${r.calibWindows}`);
+  row('bytes', 'Model size', `${r.model.length} bytes`);
+  row('time', 'Training time', `${fx(r.ms / 1000, 1)} s`);
+  return `<table id="tight-gan-table" class="tight-table"><caption>Trained model</caption><tbody>${rows.join('')}</tbody></table>${markdownTableHtml(r.table1, 'tight-gan-table1')}`;
 }
 
 /** Wire the panel. `io`: {send(msg) → id}. Returns {onMessage(m) → handled?,
@@ -131,6 +172,14 @@ export function initTight(io) {
     t1: null,
     status: '',
     plots: [],
+    gan: {
+      running: false,
+      worker: null,   // the training worker while it runs
+      job: 0,
+      progress: [],   // gan-progress messages of the last training
+      result: null,   // last gan-result (with its model bytes)
+      status: '',
+    },
   };
   const form = $('#tight-form');
   const runBtn = $('#tight-run');
@@ -158,8 +207,14 @@ export function initTight(io) {
     const env = Number(envSel.value);
     const faultType = Number(typeSel.value);
     const strategy = $('#tight-strategy').value || undefined;
-    setStatus(`simulating Env ${env}, ${FAULT_TYPES[faultType]}, seed ${seed}…`);
-    T.job = io.send({ type: 'tight', env, faultType, seed, strategy });
+    const msg = { type: 'tight', env, faultType, seed, strategy };
+    const g = T.gan.result;
+    if (strategy === 'gan' && g && $('#tight-use-trained').checked) {
+      msg.ganModel = g.model; // copied, so later runs can use it again
+      msg.ganT2 = g.t2;
+    }
+    setStatus(`simulating Env ${env}, ${FAULT_TYPES[faultType]}, seed ${seed}${msg.ganModel ? ' (trained GAN model)' : ''}…`);
+    T.job = io.send(msg);
     setRunning(true);
   }
 
@@ -259,6 +314,32 @@ export function initTight(io) {
     }, [e.t, e.rdpop, e.t.map(() => m.eta)], $('#tight-plot-rdpop'));
     $('#tight-plot-rdpop').classList.toggle('tight-nodata', !hasRdpop);
     T.plots = [lam, rd];
+    // GAN-FDSR: the largest GAN score per epoch, with T2 when it is known
+    // (a model trained here; the embedded model's T2 is not exported).
+    const isGan = m.strategy === 'gan';
+    $('#tight-fig-gan').hidden = !isGan;
+    if (isGan) {
+      const t2 = m.ganT2;
+      const gFlag = e.ganScore.map((v, i) => (e.status[i] === 'fault' ? v : null));
+      const series = [
+        tLabel,
+        { label: 'max GAN score (-)', stroke: COL.gan, width: 1.25, points: { show: false }, value: (u, v) => fx(v, 3) },
+      ];
+      const data = [e.t, e.ganScore];
+      if (t2 != null) {
+        series.push({ label: `T2 = ${fx(t2, 3)}`, stroke: COL.t2, width: 1.25, dash: [6, 4], points: { show: false }, value: (u, v) => fx(v, 3) });
+        data.push(e.t.map(() => t2));
+      }
+      series.push({ label: 'flagged epoch', stroke: COL.flag, width: 0, paths: () => null, points: { show: true, size: 5, fill: COL.flag, stroke: COL.flag, width: 1 }, value: (u, v) => (v == null ? '—' : fx(v, 3)) });
+      data.push(gFlag);
+      const gp = new uPlot({
+        ...common(170),
+        scales: { x: { time: false }, y: { range: (u, lo, hi) => [0, Math.max((t2 ?? 0) * 1.3, (hi ?? 1) * 1.08)] } },
+        series,
+        axes: [xAxis, axis('GAN score (-)', 'y')],
+      }, data, $('#tight-plot-gan'));
+      T.plots.splice(1, 0, gp);
+    }
   }
 
   let rt = 0;
@@ -269,5 +350,92 @@ export function initTight(io) {
 
   form.addEventListener('submit', (e) => { e.preventDefault(); start(); });
   setRunning(false);
+
+  // ---- Train a GAN in the browser
+  const G = T.gan;
+  const ganBtn = $('#tight-gan-train');
+  const ganCancel = $('#tight-gan-cancel');
+  const ganBar = $('#tight-gan-bar');
+  const ganDetail = $('#tight-gan-detail');
+  const useTrained = $('#tight-use-trained');
+  function ganStatus(s, cls = '') {
+    G.status = s;
+    ganDetail.textContent = s;
+    ganDetail.className = `detail${cls ? ` ${cls}` : ''}`;
+  }
+  function ganRunning(on) {
+    G.running = on;
+    ganBtn.disabled = on;
+    ganCancel.hidden = !on;
+    ganBar.hidden = !on;
+    $('#tight-gan').dataset.state = on ? 'running' : G.result ? 'done' : 'idle';
+  }
+  function ganStop() {
+    if (G.worker) G.worker.terminate();
+    G.worker = null;
+    G.job = 0;
+  }
+  function ganTrain() {
+    if (G.running) return;
+    const int = (sel, lo, hi, dflt) => {
+      const el = $(sel);
+      const v = Math.min(hi, Math.max(lo, Math.floor(Number(el.value) || dflt)));
+      el.value = v;
+      return v;
+    };
+    const epochs = int('#tight-gan-epochs', 1, 50, 2);
+    const flights = int('#tight-gan-flights', 1, 10, 2);
+    const options = { epochs, trainSeeds: Array.from({ length: flights }, (_, i) => 101 + i) };
+    G.progress = [];
+    ganBar.max = epochs + 1; // the last step: calibration of T2
+    ganBar.value = 0;
+    ganStatus(`simulating ${flights} training + 2 calibration flights, chaos analysis…`);
+    const w = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+    G.worker = w;
+    G.job += 1;
+    const id = `gan-${G.job}`;
+    w.onmessage = (ev) => {
+      const m = ev.data;
+      if (G.worker !== w || m.id !== id) return;
+      if (m.type === 'gan-progress') {
+        G.progress.push(m);
+        ganBar.value = m.epoch;
+        ganStatus(`epoch ${m.epoch}/${m.epochs} · D loss ${fx(m.dLoss, 3)} · G loss ${fx(m.gLoss, 3)} · D(real) ${fx(m.dReal, 2)} · D(fake) ${fx(m.dFake, 2)}${m.epoch === m.epochs ? ' · calibrating T2…' : ''}`);
+      } else if (m.type === 'gan-result') {
+        ganStop();
+        G.result = m;
+        ganBar.value = ganBar.max;
+        $('#tight-gan-out').innerHTML = ganResultHtml(m);
+        useTrained.disabled = false;
+        useTrained.checked = true;
+        $('#tight-strategy').value = 'gan';
+        ganStatus(`trained in ${fx(m.ms / 1000, 1)} s · ${epochs} epoch${epochs === 1 ? '' : 's'} · the next run uses this model (GAN-FDSR)`);
+        ganRunning(false);
+      } else if (m.type === 'error') {
+        ganStop();
+        ganStatus(`training failed: ${m.message}`, 'bad');
+        ganRunning(false);
+      }
+    };
+    w.onerror = (ev) => {
+      if (G.worker !== w) return;
+      ev.preventDefault();
+      ganStop();
+      ganStatus(`training failed: ${ev.message || 'the training worker could not start'}`, 'bad');
+      ganRunning(false);
+    };
+    w.postMessage({ type: 'gan-train', id, options });
+    ganRunning(true);
+  }
+  $('#tight-gan-form').addEventListener('submit', (e) => { e.preventDefault(); ganTrain(); });
+  // tightGanTrain is one synchronous call: the worker cannot read a cancel
+  // message until it returns, so Cancel ends the training worker.
+  ganCancel.addEventListener('click', () => {
+    if (!G.running) return;
+    ganStop();
+    ganStatus(`cancelled after ${G.progress.length} epoch${G.progress.length === 1 ? '' : 's'}`);
+    ganRunning(false);
+  });
+  ganRunning(false);
   return { onMessage, workerRestarted, state: T };
 }

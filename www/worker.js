@@ -6,13 +6,18 @@
 //   {type:'csv'}                           per-sample CSV of the last audit
 //   {type:'compare', seeds, methods?, includeLog}  CompareRun over every method
 //   {type:'compare-cancel', target}        stop the compare job `target`
-//   {type:'tight', env, faultType, seed, strategy?}  tightSimulate + TightDetector
+//   {type:'tight', env, faultType, seed, strategy?, ganModel?, ganT2?}
+//                                          tightSimulate + TightDetector (with
+//                                          ganModel bytes: withGanModel, GAN-FDSR)
+//   {type:'gan-train', options}            tightGanTrain (one synchronous call:
+//                                          tight.js runs it in a worker of its own,
+//                                          and cancels by terminating that worker)
 // Messages out: ready | progress | result | csv | error (each with the job id),
 // compare-progress | compare-result | compare-cancelled (see compare.js),
-// tight-result (see tight.js).
+// tight-result, gan-progress | gan-result (see tight.js).
 // A comparison runs in slices of ~50 ms, so audit messages are served in
 // between (each job keeps its own wasm object).
-import init, { Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, version } from './pkg/navguard.js';
+import init, { Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, tightGanTrain, version } from './pkg/navguard.js';
 
 const ready = init();
 let bytes = null;     // Uint8Array of the current log
@@ -52,6 +57,11 @@ self.onmessage = async (ev) => {
     }
     if (msg.type === 'tight') {
       post(tight(id, msg));
+      return;
+    }
+    if (msg.type === 'gan-train') {
+      const res = ganTrain(id, msg);
+      post(res, [res.model.buffer]);
       return;
     }
     if (msg.type === 'file') {
@@ -138,7 +148,7 @@ async function compare(id, msg) {
 
 // ------------------------------------------------- tightly coupled GNSS/INS
 
-const TIGHT_STRATEGIES = ['none', 'fdi', 'fda', 'switch'];
+const TIGHT_STRATEGIES = ['none', 'fdi', 'fda', 'switch', 'gan'];
 
 // One simulated flight of docs/tight.md through a TightDetector (under a
 // second of work, so in one go). Returns the GNSS epochs only (IMU-only rows
@@ -156,14 +166,18 @@ function tight(id, msg) {
     if (!TIGHT_STRATEGIES.includes(msg.strategy)) throw new Error(`unknown strategy ${msg.strategy}`);
     config.strategy = msg.strategy;
   }
-  const det = new TightDetector(config);
+  // A trained GAN model (tightGanTrain's bytes) replaces the embedded one;
+  // withGanModel makes the strategy GAN-FDSR whatever config says.
+  const ganModel = msg.ganModel instanceof Uint8Array ? msg.ganModel : null;
+  if (ganModel) config.strategy = 'gan';
+  const det = ganModel ? TightDetector.withGanModel(config, ganModel) : new TightDetector(config);
   let out;
   try {
     out = det.pushCsv(sim.csv);
   } finally {
     det.free();
   }
-  const ep = { t: [], status: [], prn: [], lambda: [], statistic: [], rdpop: [], action: [], nSats: [] };
+  const ep = { t: [], status: [], prn: [], lambda: [], statistic: [], rdpop: [], action: [], nSats: [], ganScore: [] };
   const val = (x) => (typeof x === 'number' && Number.isFinite(x) ? x : null);
   for (const o of out) {
     if (o.status === 'no-gnss') continue;
@@ -175,14 +189,27 @@ function tight(id, msg) {
     ep.rdpop.push(val(o.rdpop));
     ep.action.push(o.action ?? null);
     ep.nSats.push(o.n_sats ?? null);
+    ep.ganScore.push(val(o.gan_score_max));
   }
   return {
     type: 'tight-result', id, env, faultType, seed,
     strategy: config.strategy, alpha: config.alpha, eta: config.eta,
+    ganModel: ganModel ? 'trained' : config.strategy === 'gan' ? 'embedded' : null,
+    ganT2: ganModel && Number.isFinite(msg.ganT2) ? msg.ganT2 : null,
     faultyPrn: sim.faultyPrn, faultStart: sim.faultStart, faultEnd: sim.faultEnd,
     rows: out.length, tEnd: out.length ? out[out.length - 1].t : 0,
     epochs: ep, ms: performance.now() - t0,
   };
+}
+
+// Train a GAN-FDSR model (tightGanTrain): one synchronous wasm call of tens
+// of seconds; a gan-progress message leaves after every epoch.
+function ganTrain(id, msg) {
+  const t0 = performance.now();
+  const res = tightGanTrain(msg.options || undefined, (p) => {
+    post({ type: 'gan-progress', id, ...p, ms: performance.now() - t0 });
+  });
+  return { type: 'gan-result', id, ...res, ms: performance.now() - t0 };
 }
 
 async function readFile(id, file) {

@@ -895,3 +895,136 @@ test('tightly coupled panel: Env 1, 20 m step, seed 7 names the injected satelli
     await page.close();
   }
 });
+
+test('tightly coupled panel: GAN-FDSR (embedded model) names the injected satellite and plots the GAN score', async () => {
+  const { page, errors } = await openPage();
+  try {
+    await page.selectOption('#tight-env', '1');
+    await page.selectOption('#tight-type', '1');
+    await page.fill('#tight-seed', '7');
+    await page.selectOption('#tight-strategy', 'gan');
+    await page.click('#tight-run');
+    await page.waitForFunction(() => {
+      const t = window.navguard.tight;
+      return t && !t.running && (t.result || /failed|interrupted/.test(t.status));
+    }, null, { timeout: 90000 });
+    const status = await page.evaluate(() => window.navguard.tight.status);
+    assert.match(status, /^done in/, `tight run did not finish: ${status}`);
+
+    // the same flight through a GAN-FDSR TightDetector directly in the page
+    const direct = await page.evaluate(async () => {
+      const m = await import('./pkg/navguard.js');
+      await m.default();
+      const s = m.tightSimulate(1, 1, 7);
+      const out = new m.TightDetector({ ...s.config, strategy: 'gan' }).pushCsv(s.csv);
+      const first = out.find((o) => o.status === 'fault' && o.t >= s.faultStart);
+      const scores = out.map((o) => o.gan_score_max).filter((v) => typeof v === 'number' && Number.isFinite(v));
+      return { faultyPrn: s.faultyPrn, faultStart: s.faultStart, firstT: first?.t, firstPrn: first?.faulty_prn, maxScore: Math.max(...scores) };
+    });
+    assert.equal(direct.firstPrn, direct.faultyPrn, JSON.stringify(direct));
+    const prnCell = await page.textContent('#tight-table tr[data-key="prn"] td');
+    assert.match(prnCell, new RegExp(`^G${direct.faultyPrn} vs G${direct.faultyPrn} ✓$`), `named satellite: ${prnCell}`);
+    assert.equal(await page.textContent('#tight-table tr[data-key="first"] td'), `${direct.firstT.toFixed(1)} s`);
+    // measured in Node: 5 s after the onset with seed 7 (FDI: 0 s)
+    const delay = await page.textContent('#tight-table tr[data-key="delay"] td');
+    assert.equal(delay, `${(direct.firstT - direct.faultStart).toFixed(1)} s`);
+    assert.ok(direct.firstT - direct.faultStart <= 5 + 1e-6, delay);
+    assert.equal(await page.textContent('#tight-table tr[data-key="before"] td'), '0');
+    assert.equal(await page.textContent('#tight-table tr[data-key="other"] td'), '0');
+    assert.match(await page.textContent('#tight-table tr[data-key="setup"] td'), /^gan · 3\.291/);
+    assert.equal(await page.textContent('#tight-table tr[data-key="gan"] td'), `embedded default · — · ${direct.maxScore.toFixed(3)}`);
+
+    // the GAN score plot: a third synchronised plot with the per-epoch scores
+    assert.equal(await page.$eval('#tight-fig-gan', (e) => e.hidden), false);
+    const sizes = await page.$$eval('#tight-plot-gan .uplot canvas', (cs) => cs.map((c) => [c.width, c.height]));
+    assert.equal(sizes.length, 1, 'expected the GAN score plot');
+    assert.ok(sizes[0][0] > 0 && sizes[0][1] > 0, `canvas ${sizes[0]}`);
+    assert.match(await page.textContent('#tight-plot-gan .u-legend'), /max GAN score/);
+    const st = await page.evaluate(() => ({ n: window.navguard.tight.plots.length, scores: window.navguard.tight.result.epochs.ganScore, epochs: window.navguard.tight.result.epochs.t.length }));
+    assert.equal(st.n, 3);
+    const finite = st.scores.filter((v) => v != null);
+    assert.ok(finite.length > 350 && finite.length <= st.epochs, `${finite.length} scores of ${st.epochs} epochs`);
+    assert.equal(Math.max(...finite), direct.maxScore);
+
+    // back to FDI: the GAN plot goes away
+    await page.selectOption('#tight-strategy', 'fdi');
+    await page.click('#tight-run');
+    await page.waitForFunction(() => !window.navguard.tight.running && window.navguard.tight.result.strategy === 'fdi', null, { timeout: 60000 });
+    assert.equal(await page.$eval('#tight-fig-gan', (e) => e.hidden), true);
+    assert.equal(await page.evaluate(() => window.navguard.tight.plots.length), 2);
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+test('tightly coupled panel: train a GAN in the browser (cancel, then 1 epoch), then run with the trained model', async () => {
+  const { page, errors } = await openPage();
+  try {
+    await page.click('#tight-gan summary');
+    assert.equal(await page.$eval('#tight-use-trained', (e) => e.disabled), true);
+    // Cancel: the training worker is ended at once, the panel says so.
+    await page.fill('#tight-gan-epochs', '3');
+    await page.click('#tight-gan-train');
+    assert.equal(await page.$eval('#tight-gan-cancel', (e) => e.hidden), false);
+    await page.click('#tight-gan-cancel');
+    assert.match(await page.textContent('#tight-gan-detail'), /^cancelled after 0 epochs$/);
+    assert.equal(await page.$eval('#tight-gan-train', (e) => e.disabled), false);
+    assert.equal(await page.evaluate(() => window.navguard.tight.gan.result), null);
+
+    // One epoch on one training flight (two calibration flights).
+    await page.fill('#tight-gan-epochs', '1');
+    await page.fill('#tight-gan-flights', '1');
+    await page.click('#tight-gan-train');
+    await page.waitForFunction(() => window.navguard.tight.gan.progress.length >= 1 || !window.navguard.tight.gan.running, null, { timeout: 180000 });
+    await page.waitForFunction(() => !window.navguard.tight.gan.running, null, { timeout: 180000 });
+    const g = await page.evaluate(() => {
+      const G = window.navguard.tight.gan;
+      return { status: G.status, progress: G.progress, result: G.result && { ...G.result, model: G.result.model.length } };
+    });
+    assert.match(g.status, /^trained in \d+\.\d s · 1 epoch · /, g.status);
+    assert.equal(g.progress.length, 1);
+    assert.deepEqual([g.progress[0].epoch, g.progress[0].epochs], [1, 1]);
+    for (const k of ['dLoss', 'gLoss', 'dReal', 'dFake']) assert.ok(Number.isFinite(g.progress[0][k]), `${k} ${g.progress[0][k]}`);
+    const r = g.result;
+    assert.ok(r.model > 1000 && r.t2 > 0 && r.lambda > 0 && r.lambda < 1 && r.parameters > 100 && r.tau >= 1 && r.m >= 2, JSON.stringify(r));
+    assert.equal(await page.$eval('#tight-gan-bar', (e) => e.hidden), true);
+    // the results as HTML tables
+    assert.equal(await page.textContent('#tight-gan-table tr[data-key="t2"] td'), r.t2.toFixed(4));
+    assert.equal(await page.textContent('#tight-gan-table tr[data-key="m"] td'), String(r.m));
+    assert.equal(await page.textContent('#tight-gan-table tr[data-key="params"] td'), String(r.parameters));
+    const t1 = await page.$$eval('#tight-gan-table1 tbody tr', (trs) => trs.map((tr) => Array.from(tr.cells, (c) => c.textContent)));
+    assert.equal(t1.length, 9, JSON.stringify(t1));
+    for (const row of t1) {
+      assert.match(row[0], /^G\d+$/);
+      assert.ok(Number(row[1]) >= 1 && Number(row[2]) >= 2 && Number.isFinite(Number(row[3])), JSON.stringify(row));
+    }
+    assert.deepEqual(await page.$$eval('#tight-gan-table1 thead th', (ths) => ths.map((th) => th.textContent)), ['Satellite', 'τ', 'm', 'Largest Lyapunov exponent']);
+
+    // the next run uses the trained model (strategy switched to GAN-FDSR)
+    assert.equal(await page.$eval('#tight-use-trained', (e) => !e.disabled && e.checked), true);
+    assert.equal(await page.$eval('#tight-strategy', (e) => e.value), 'gan');
+    await page.selectOption('#tight-env', '1');
+    await page.selectOption('#tight-type', '1');
+    await page.fill('#tight-seed', '7');
+    await page.click('#tight-run');
+    await page.waitForFunction(() => {
+      const t = window.navguard.tight;
+      return t && !t.running && (t.result || /failed|interrupted/.test(t.status));
+    }, null, { timeout: 90000 });
+    const status = await page.evaluate(() => window.navguard.tight.status);
+    assert.match(status, /^done in/, `tight run did not finish: ${status}`);
+    const res = await page.evaluate(() => ({ ganModel: window.navguard.tight.result.ganModel, ganT2: window.navguard.tight.result.ganT2, faultyPrn: window.navguard.tight.result.faultyPrn }));
+    assert.deepEqual(res, { ganModel: 'trained', ganT2: r.t2, faultyPrn: res.faultyPrn });
+    assert.match(await page.textContent('#tight-table tr[data-key="gan"] td'), new RegExp(`^trained here · ${r.t2.toFixed(3)} · \\d\\.\\d{3}$`));
+    assert.match(await page.textContent('#tight-plot-gan .u-legend'), new RegExp(`T2 = ${r.t2.toFixed(3)}`));
+    const prnCell = await page.textContent('#tight-table tr[data-key="prn"] td');
+    assert.match(prnCell, new RegExp(`^G${res.faultyPrn} vs G${res.faultyPrn} ✓$`), `named satellite: ${prnCell}`);
+
+    await page.$eval('#tight-panel', (e) => e.scrollIntoView());
+    await page.screenshot({ path: join(artifacts, 'page-tight-gan.png'), fullPage: true });
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
