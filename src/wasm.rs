@@ -126,9 +126,10 @@ export interface AuditReport {
 export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array; rPn: Float64Array; rPe: Float64Array; rPd: Float64Array; rVn: Float64Array; rVe: Float64Array; rVd: Float64Array; rBaro: Float64Array } }
 /** One epoch for the tightly coupled detector: IMU (rad/s, m/s^2) and pseudo-ranges (m); `pr: []` on IMU-only rows. */
 export interface TightRow { t: number; gyro: [number, number, number]; accel: [number, number, number]; pr: { prn: number; pr: number }[] }
+/** Fields that do not apply to a row are absent (undefined), e.g. `faulty_prn` on a fault-free epoch or `gan_score_max` for strategies other than `gan`. */
 export interface TightOutput {
-  t: number; status: "initializing" | "no-gnss" | "ok" | "fault"; faulty_prn: number | null; statistic: number | null;
-  lambda_max: number; rdpop: number | null; action: string | null; gan_score_max: number | null; n_sats: number;
+  t: number; status: "initializing" | "no-gnss" | "ok" | "fault"; faulty_prn?: number; statistic?: number;
+  lambda_max: number; rdpop?: number; action?: string; gan_score_max?: number; n_sats: number;
   position_ned: [number, number, number]; velocity_ned: [number, number, number]; clock_bias_m: number;
 }
 /** Options of `tightGanTrain` (all optional): fault-free training and calibration flights, GAN size. */
