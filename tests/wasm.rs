@@ -217,7 +217,7 @@ fn gan_fdsr_streams_and_names_the_stepped_satellite() {
     let sim = tight_simulate(1, 1, 7.0).unwrap();
     let cfg = get(&sim, "config");
     // `method` is another name for `strategy`: one of the two, not both.
-    Reflect::delete_property(cfg.unchecked_ref(), &"strategy".into()).unwrap();
+    Reflect::delete_property(cfg.unchecked_ref::<Object>(), &"strategy".into()).unwrap();
     Reflect::set(&cfg, &"method".into(), &"gan".into()).unwrap();
     let csv = get(&sim, "csv").as_string().unwrap();
     let prn = get(&sim, "faultyPrn").as_f64().unwrap();
