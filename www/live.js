@@ -248,6 +248,12 @@ async function save(m, reason) {
   const rec = record(m, reason);
   try {
     await store.put(store.SESSION, rec);
+    // A save still in flight when the session stopped must not outlive the
+    // stop's discard.
+    if (L.phase !== 'running' && L.phase !== 'paused') {
+      await discardSaved();
+      return;
+    }
     if (L.lastSnap === m) L.lastSnapSaved = true;
     L.saves++;
     L.lastSaved = { savedAt: rec.savedAt, nextRow: rec.nextRow, rowCount: rec.rowCount, stats: rec.stats, reason };
@@ -286,8 +292,10 @@ function togglePause() {
 async function stop() {
   if (L.phase === 'idle') return;
   setPhase('idle');
+  L.stopping = true;
   try { await request({ type: 'stop' }); } catch { /* the worker reports nothing useful here */ }
   await discardSaved();
+  L.stopping = false;
   render();
 }
 
@@ -608,6 +616,8 @@ export function initLive(helpers) {
   // handle for the browser test and for debugging
   window.__navguardLive = {
     get phase() { return L.phase; },
+    /** true while Stop waits for the worker and discards the saved session */
+    get stopping() { return !!L.stopping; },
     /** true once the stored session (if any) has been checked on load */
     get checked() { return !!L.checked; },
     get source() { return L.source; },

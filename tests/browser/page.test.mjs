@@ -505,7 +505,8 @@ test('live session: a damaged or foreign-version snapshot shows the error banner
     await page.waitForFunction(() => window.__navguardLive.phase === 'running', null, { timeout: 30000 });
     assert.equal(await page.evaluate(() => window.__navguardLive.startRowCount), 3000);
     await page.click('#live-stop');
-    await page.waitForFunction(() => window.__navguardLive.phase === 'idle');
+    // idle at once; the saved session is gone once the stop has finished
+    await page.waitForFunction(() => window.__navguardLive.phase === 'idle' && !window.__navguardLive.stopping);
     assert.equal(await readSaved(page), null, 'Stop did not remove the saved session');
 
     // another format version: rejected on load by snapshotInfo, never offered
@@ -998,8 +999,11 @@ test('tightly coupled panel: train a GAN in the browser (cancel, then 1 epoch), 
     for (const row of t1) {
       assert.match(row[0], /^G\d+$/);
       assert.ok(Number(row[1]) >= 1 && Number(row[2]) >= 2 && Number.isFinite(Number(row[3])), JSON.stringify(row));
+      // Cao E2 range: near 1 for the simulated (stochastic) series.
+      const [lo, hi] = row[4].split('–').map(Number);
+      assert.ok(lo > 0.5 && lo <= hi && hi < 1.5, JSON.stringify(row));
     }
-    assert.deepEqual(await page.$$eval('#tight-gan-table1 thead th', (ths) => ths.map((th) => th.textContent)), ['Satellite', 'τ', 'm', 'Largest Lyapunov exponent']);
+    assert.deepEqual(await page.$$eval('#tight-gan-table1 thead th', (ths) => ths.map((th) => th.textContent)), ['Satellite', 'τ', 'm', 'Largest Lyapunov exponent', 'Cao E2 (min–max over d)']);
 
     // the next run uses the trained model (strategy switched to GAN-FDSR)
     assert.equal(await page.$eval('#tight-use-trained', (e) => !e.disabled && e.checked), true);
