@@ -111,8 +111,11 @@ impl GanDetectorModel {
     }
 
     fn check(&self) -> Result<(), TightError> {
-        if self.tau == 0 || self.m == 0 || self.m != self.gan.config().dim {
-            return Err(TightError::new("gan model", format!("tau {} / m {} do not match the GAN (dim {})", self.tau, self.m, self.gan.config().dim)));
+        // Weights, shapes and thresholds: a forged model must fail here, not
+        // index out of range during inference.
+        self.gan.validate()?;
+        if self.tau == 0 || self.tau > 1000 || self.m == 0 || self.m != self.gan.config().dim {
+            return Err(TightError::new("gan model", format!("tau {} (1..=1000) / m {} do not match the GAN (dim {})", self.tau, self.m, self.gan.config().dim)));
         }
         if !(self.scale.is_finite() && self.scale > 0.0 && self.mean.is_finite() && self.gen_rms.is_finite() && self.gen_rms >= 0.0) {
             return Err(TightError::new("gan model", format!("bad normalisation: mean {}, scale {}, gen_rms {}", self.mean, self.scale, self.gen_rms)));
@@ -501,6 +504,16 @@ mod tests {
         bad[0] ^= 1;
         assert!(GanDetectorModel::from_bytes(&bad).unwrap_err().message.contains("magic"));
         assert!(GanDetectorModel::from_bytes(&[]).is_err());
+        // The paper-faithful ρD model of `navguard-gan table5` loads too.
+        let rhod = GanDetectorModel::from_bytes(include_bytes!("gan_rhod.bin")).unwrap();
+        assert_eq!((rhod.input, rhod.lambda_test), (GanInput::IncrementDifference, false));
+        // Well-formed bytes of a forged model: refused by the checks.
+        let mut forged = m.clone();
+        forged.tau = usize::MAX / 2;
+        assert!(GanDetectorModel::from_bytes(&forged.to_bytes().unwrap()).unwrap_err().message.contains("tau"));
+        let mut forged = m.clone();
+        forged.m += 1;
+        assert!(GanDetectorModel::from_bytes(&forged.to_bytes().unwrap()).is_err());
     }
 
     #[test]
