@@ -66,7 +66,10 @@ impl Model {
     pub fn embedded() -> Result<Model, String> {
         static EMBEDDED: std::sync::OnceLock<Result<Model, String>> = std::sync::OnceLock::new();
         EMBEDDED
-            .get_or_init(|| serde_json::from_str(include_str!("default_model.json")).map_err(|e| format!("embedded model: {e}")))
+            .get_or_init(|| {
+                serde_json::from_str(include_str!("default_model.json"))
+                    .map_err(|e| format!("embedded model: {e}"))
+            })
             .clone()
     }
 
@@ -87,7 +90,9 @@ impl Model {
             let mut det = Detector::with_model(cfg.clone(), &base);
             det.set_oracle(true);
             for (i, s) in rows.iter().enumerate() {
-                let o = det.push(s).map_err(|e| format!("training stream, {e} (index {i})"))?;
+                let o = det
+                    .push(s)
+                    .map_err(|e| format!("training stream, {e} (index {i})"))?;
                 if !o.gps_epoch || s.label.is_nan() || o.kind == kind::NO_GPS {
                     continue;
                 }
@@ -122,7 +127,11 @@ impl Model {
         let d2 = pick(&mut fault, cfg.q, &mut rng);
         let mut xs = d1.clone();
         xs.extend_from_slice(&d2);
-        let ys: Vec<f64> = d1.iter().map(|_| 0.0).chain(d2.iter().map(|_| 1.0)).collect();
+        let ys: Vec<f64> = d1
+            .iter()
+            .map(|_| 0.0)
+            .chain(d2.iter().map(|_| 1.0))
+            .collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for x in &xs {
             for k in 0..2 {
@@ -152,12 +161,23 @@ impl Model {
     /// Grid-initialised ANFIS with a plain R ramp, used only to drive the
     /// trainer's oracle runs (their decisions come from the labels).
     pub fn untrained() -> Model {
-        Model { anfis: Anfis::init_grid([0.0, 0.0], [3.0, 1.0]), d1: vec![], d2: vec![], provenance: "untrained".into() }
+        Model {
+            anfis: Anfis::init_grid([0.0, 0.0], [3.0, 1.0]),
+            d1: vec![],
+            d2: vec![],
+            provenance: "untrained".into(),
+        }
     }
 
     pub fn check(&self) -> Result<(), String> {
         crate::config::check_anfis(&self.anfis)?;
-        if !self.d1.iter().chain(self.d2.iter()).flatten().all(|v| v.is_finite()) {
+        if !self
+            .d1
+            .iter()
+            .chain(self.d2.iter())
+            .flatten()
+            .all(|v| v.is_finite())
+        {
             return Err("database entries must be finite".into());
         }
         Ok(())
@@ -212,7 +232,11 @@ pub struct InputError {
 
 impl core::fmt::Display for InputError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "row {}: field '{}': {}", self.row, self.field, self.reason)
+        write!(
+            f,
+            "row {}: field '{}': {}",
+            self.row, self.field, self.reason
+        )
     }
 }
 
@@ -239,7 +263,11 @@ struct Ring {
 
 impl Ring {
     fn new(cap: usize, init: &[[f64; 2]]) -> Self {
-        let mut r = Ring { buf: vec![[0.0; 2]; cap.max(1)], head: 0, len: 0 };
+        let mut r = Ring {
+            buf: vec![[0.0; 2]; cap.max(1)],
+            head: 0,
+            len: 0,
+        };
         let skip = init.len().saturating_sub(cap);
         for x in init.iter().skip(skip) {
             r.push(*x);
@@ -259,13 +287,21 @@ impl Ring {
     fn check_shape(&self, q: usize, name: &str) -> Result<(), String> {
         let cap = self.buf.len();
         if cap != q.max(1) || self.head >= cap || self.len > cap {
-            return Err(format!("database {name}: capacity {cap} / head {} / len {} inconsistent with q = {q}", self.head, self.len));
+            return Err(format!(
+                "database {name}: capacity {cap} / head {} / len {} inconsistent with q = {q}",
+                self.head, self.len
+            ));
         }
         Ok(())
     }
 }
 
 const IMU_TIMEOUT: f64 = 0.25; // s: older IMU is not used for prediction
+/// The IMU consistency joins the decision after this much flight (s) and
+/// this many in-flight windows learnt: its σ must be the flight's, not the
+/// ground's (on the real Loiter log, take-off alone reaches 3–6).
+const IMU_ARM_S: f64 = 20.0;
+const IMU_ARM_WINDOWS: u32 = 50;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
@@ -332,6 +368,15 @@ pub struct Detector {
     /// without IMU.
     dv_imu: Vector3<f64>,
     imu_gap: bool,
+    /// Time flown with the filter running, s: the IMU consistency test joins
+    /// the decision once its σ has been learnt in flight.
+    flight_time: f64,
+    /// Inside a fault episode; `imu_episode`: the IMU consistency drove its
+    /// first verdict. Any other episode restarts the IMU window at every
+    /// epoch, so the GPS velocities of an outage or a GPS fault never sit in
+    /// the window that judges the clean epochs after it.
+    in_episode: bool,
+    imu_episode: bool,
     /// Consecutive baro samples consistent with the filter while withheld.
     baro_calm: u32,
     last: Output,
@@ -366,7 +411,9 @@ impl Detector {
             None => Model::embedded()?,
         };
         let pool = match cfg.method {
-            Method::Rms | Method::Knee | Method::Adaptive => Some(methods::default_pool(cfg.method)?),
+            Method::Rms | Method::Knee | Method::Adaptive => {
+                Some(methods::default_pool(cfg.method)?)
+            }
             _ => None,
         };
         let mut det = Self::with_model(cfg, &model);
@@ -403,15 +450,27 @@ impl Detector {
             alt_int: 0.0,
             dv_imu: Vector3::zeros(),
             imu_gap: true,
+            flight_time: 0.0,
+            in_episode: false,
+            imu_episode: false,
             baro_calm: 0,
-            last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
+            last: Output {
+                kind: kind::NO_GPS,
+                driver: 255,
+                ..Output::default()
+            },
             last_ind: Indicators::default(),
             stats: Stats::default(),
             oracle: false,
             train_x: Vec::with_capacity(2 * q),
             train_y: Vec::with_capacity(2 * q),
             d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
-            d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
+            d0_y: model
+                .d1
+                .iter()
+                .map(|_| 0.0)
+                .chain(model.d2.iter().map(|_| 1.0))
+                .collect(),
             prev_nu: None,
             maha: Default::default(),
             baro_inn: None,
@@ -434,17 +493,29 @@ impl Detector {
         self.d2.check_shape(q, "D2")?;
         self.ind.check_shape(&self.cfg.indicator_settings())?;
         if self.d0_x.len() != self.d0_y.len() {
-            return Err(format!("D0: {} samples but {} labels", self.d0_x.len(), self.d0_y.len()));
+            return Err(format!(
+                "D0: {} samples but {} labels",
+                self.d0_x.len(),
+                self.d0_y.len()
+            ));
         }
         crate::config::check_anfis(&self.anfis).map_err(|e| format!("anfis: {e}"))?;
         for w in &self.maha {
             w.check_shape()?;
         }
-        let pooled = matches!(self.cfg.method, Method::Rms | Method::Knee | Method::Adaptive);
+        let pooled = matches!(
+            self.cfg.method,
+            Method::Rms | Method::Knee | Method::Adaptive
+        );
         match &self.pool {
             Some(p) if pooled => p.eval.check_shape()?,
             None if !pooled => {}
-            _ => return Err(format!("threshold pool present/absent does not match method \"{}\"", self.cfg.method.name())),
+            _ => {
+                return Err(format!(
+                    "threshold pool present/absent does not match method \"{}\"",
+                    self.cfg.method.name()
+                ))
+            }
         }
         self.train_x = Vec::with_capacity(2 * q);
         self.train_y = Vec::with_capacity(2 * q);
@@ -484,6 +555,11 @@ impl Detector {
         self.kf.as_ref().map(|k| k.velocity())
     }
 
+    /// Filter accelerometer-bias estimate, body frame (m/s²), once initialised.
+    pub fn accel_bias(&self) -> Option<Vector3<f64>> {
+        self.kf.as_ref().map(|k| k.accel_bias())
+    }
+
     /// Filter position estimate NED (m), once initialised.
     pub fn position(&self) -> Option<Vector3<f64>> {
         self.kf.as_ref().map(|k| k.position())
@@ -505,7 +581,11 @@ impl Detector {
         validate_sample(s, row)?;
         if let Some(lt) = self.last_t {
             if s.t < lt {
-                return Err(InputError { row, field: "t", reason: format!("time goes backwards: {} after {}", s.t, lt) });
+                return Err(InputError {
+                    row,
+                    field: "t",
+                    reason: format!("time goes backwards: {} after {}", s.t, lt),
+                });
             }
         }
         Ok(())
@@ -527,7 +607,11 @@ impl Detector {
             // Every sensor stopped: a logging gap, not a navigation fault.
             self.stats.data_gaps += 1;
             // No verdict carries across a gap: it starts from "no GPS yet".
-            self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
+            self.last = Output {
+                kind: kind::NO_GPS,
+                driver: 255,
+                ..Output::default()
+            };
             self.kf = None;
             self.imu = None;
             self.ind.reset_references();
@@ -542,12 +626,18 @@ impl Detector {
 
         // Predict to this row's time with the IMU held from the previous row.
         if dt > 0.0 {
-            let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
+            let imu = self
+                .imu
+                .filter(|(ti, _)| t - ti <= IMU_TIMEOUT)
+                .map(|(_, u)| u);
             if let Some(kf) = self.kf.as_mut() {
                 let v0 = kf.velocity();
                 match kf.predict(dt, imu.as_ref()) {
                     Ok(()) => {
                         let v1 = kf.velocity();
+                        if v1.norm() > 1.0 || -kf.position()[2] > 2.0 {
+                            self.flight_time += dt;
+                        }
                         self.alt_int -= 0.5 * (v0[2] + v1[2]) * dt;
                         if imu.is_some() {
                             self.dv_imu += v1 - v0;
@@ -561,7 +651,13 @@ impl Detector {
         }
         if s.has_accel() && s.has_attitude() {
             if let Some(q) = quat_from_wxyz(s.qw, s.qx, s.qy, s.qz) {
-                self.imu = Some((t, ImuInput { f_body: Vector3::new(s.ax, s.ay, s.az), q }));
+                self.imu = Some((
+                    t,
+                    ImuInput {
+                        f_body: Vector3::new(s.ax, s.ay, s.az),
+                        q,
+                    },
+                ));
                 self.stats.imu_rows += 1;
             }
         }
@@ -579,6 +675,9 @@ impl Detector {
                 o.status = 1;
                 o.kind = kind::OUTAGE;
                 o.f = 1.0;
+                self.ind.clear_imu();
+                self.in_episode = true;
+                self.imu_episode = false;
                 // The filter coasts; the first fix back is judged against it.
                 self.receiver_lost = true;
                 if self.coast_start.is_none() {
@@ -601,7 +700,9 @@ impl Detector {
     /// ground too; mere silence counts only in flight (logs often stop
     /// sending GPS after landing).
     fn is_outage(&self, t: f64, s: &Sample) -> bool {
-        let Some(lf) = self.last_fix_t else { return false };
+        let Some(lf) = self.last_fix_t else {
+            return false;
+        };
         if !self.fix_seen {
             return false;
         }
@@ -645,20 +746,29 @@ impl Detector {
         let inn = kf.baro_innovation(baro);
         self.resid[6] = inn.nu[0];
         let g = |(nu, s): (f64, f64)| nu.abs() / s.max(1e-12).sqrt();
-        if self.baro_inn.is_none_or(|b| g((inn.nu[0], inn.s[0])) > g(b)) {
+        if self
+            .baro_inn
+            .is_none_or(|b| g((inn.nu[0], inn.s[0])) > g(b))
+        {
             self.baro_inn = Some((inn.nu[0], inn.s[0]));
         }
         let h_prior = -kf.x[2] + kf.x[9];
         let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
         let prev = self.ind.previous(6);
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
-        let cons = self.ind.observe_baro(t, baro - self.alt_int, self.group_bad[2]);
+        let cons = self
+            .ind
+            .observe_baro(t, baro - self.alt_int, self.group_bad[2]);
         if self.group_bad[2] {
             // Withheld baro that follows the filter's climb again (its change
             // since before the fault is consistent): the fault is over, but
             // the offset state absorbed part of it before detection, so
             // re-anchor the offset instead of judging the baro against it.
-            self.baro_calm = if cons < BARO_RECOVER { self.baro_calm + 1 } else { 0 };
+            self.baro_calm = if cons < BARO_RECOVER {
+                self.baro_calm + 1
+            } else {
+                0
+            };
             if self.baro_calm >= RECOVER_EPOCHS {
                 self.baro_calm = 0;
                 self.group_bad[2] = false;
@@ -722,7 +832,16 @@ impl Detector {
             self.imu_gap = true;
             self.coast_start = None;
             self.prev_nu = None;
-            return Output { t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
+            return Output {
+                t,
+                status: 0,
+                f: 0.0,
+                r: 0.0,
+                c: 0.0,
+                kind: kind::NORMAL,
+                gps_epoch: true,
+                driver: 255,
+            };
         };
 
         // Residuals and predicted changes since the last epoch.
@@ -732,7 +851,8 @@ impl Detector {
         let mut prev_r = [0.0; 6];
         for a in 0..3 {
             prev_r[a] = self.ind.previous(a);
-            self.ind.observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
+            self.ind
+                .observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
         }
         let vel_prior = kf.velocity();
         let mut vin_opt = None;
@@ -742,7 +862,12 @@ impl Detector {
             self.resid[3..6].copy_from_slice(&vin.nu);
             for a in 0..3 {
                 prev_r[3 + a] = self.ind.previous(3 + a);
-                self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.P[(3 + a, 3 + a)]);
+                self.ind.observe(
+                    3 + a,
+                    vin.nu[a],
+                    vel_prior[a] - self.prev_vel[a],
+                    kf.P[(3 + a, 3 + a)],
+                );
             }
         }
         // Position–velocity consistency: the GPS's own position change
@@ -767,9 +892,14 @@ impl Detector {
             self.imu_gap = false;
         }
         match &vel {
-            Some(v) => self.ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
+            Some(v) => self
+                .ind
+                .observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
             None => self.ind.clear_imu(),
         }
+        self.ind.set_imu_fold(
+            self.flight_time >= IMU_ARM_S && self.ind.imu_learnt() >= IMU_ARM_WINDOWS,
+        );
         let ind = self.ind.close_epoch();
         self.last_ind = ind;
         let x = inputs(ind.r, ind.c);
@@ -783,7 +913,12 @@ impl Detector {
         } else {
             let mut nu = [f64::NAN; 6];
             nu[..3].copy_from_slice(&pin.nu);
-            let mut inn = EpochInnovations { nu, s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(), m: 3, baro: baro_inn };
+            let mut inn = EpochInnovations {
+                nu,
+                s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(),
+                m: 3,
+                baro: baro_inn,
+            };
             for a in 0..3 {
                 inn.s[(a, a)] = pin.s[a];
             }
@@ -795,7 +930,10 @@ impl Detector {
                 }
             }
             dr = core::array::from_fn(|g| {
-                core::array::from_fn(|a| self.prev_nu.map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a]))
+                core::array::from_fn(|a| {
+                    self.prev_nu
+                        .map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a])
+                })
             });
             self.prev_nu = Some(inn.nu);
             match self.cfg.method {
@@ -812,8 +950,26 @@ impl Detector {
             }
         };
         let f = dec.map_or(f_anfis, |d| d.score);
-        let th = if dec.is_some() { 1.0 } else { self.cfg.threshold };
+        let th = if dec.is_some() {
+            1.0
+        } else {
+            self.cfg.threshold
+        };
         let mut fault = if self.oracle { s.label >= 0.5 } else { f >= th };
+        if fault {
+            if !self.in_episode {
+                self.in_episode = true;
+                // The IMU test alone: no other group departed (a zeroed or
+                // frozen GPS velocity also fails it, but the Δr test sees it too).
+                self.imu_episode = self.ind.imu_folded() && self.ind.r_unfolded() < GATE;
+            }
+            if !self.imu_episode {
+                self.ind.clear_imu();
+            }
+        } else {
+            self.in_episode = false;
+            self.imu_episode = false;
+        }
 
         // Gate: during a fault, withhold the sensors that departed. GPS
         // position and velocity come from one receiver and go together.
@@ -823,7 +979,13 @@ impl Detector {
             if t - start > self.cfg.max_coast {
                 reset = true;
             }
-            let bad = |g: usize| ind.r_group[g].is_finite() && ind.r_group[g] > GATE;
+            // The IMU consistency condemns the IMU, not the GPS: the GPS
+            // velocity is withheld on its own departure only.
+            let r_vel = self.ind.r_vel_unfolded();
+            let bad = |g: usize| {
+                let r = if g == 1 { r_vel } else { ind.r_group[g] };
+                r.is_finite() && r > GATE
+            };
             // Fault memory: a group that departed stays withheld for the rest
             // of the episode, so a fault that flickers around the gate cannot
             // leak into the filter; a group that never departed (GPS velocity
@@ -862,11 +1024,20 @@ impl Detector {
             // A position-only episode also needs the position–velocity test
             // back in its clean range, so a ramp that paused the verdict is
             // not re-anchored on.
-            let offset_ok =
-                if self.receiver_lost { !(ind.r_group[1] > RECOVER_R) } else { !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV) };
+            let offset_ok = if self.receiver_lost {
+                !(ind.r_group[1] > RECOVER_R)
+            } else {
+                !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV)
+            };
             let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !bad(2);
             self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
-            if !self.oracle && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
+            // An IMU episode ends when the IMU agrees with the GPS again, not
+            // by re-anchoring on a GPS that never departed.
+            if !self.oracle
+                && !self.imu_episode
+                && self.calm_epochs >= RECOVER_EPOCHS
+                && t - start > 0.5
+            {
                 // The GPS is self-consistent again and the offset is within
                 // what the coast could have drifted: re-anchor, verdict normal.
                 reset = true;
@@ -913,7 +1084,8 @@ impl Detector {
                     Ok(()) => {
                         for a in 0..3 {
                             let post = v[a] - kf.x[3 + a];
-                            self.ind.accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)], post);
+                            self.ind
+                                .accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)], post);
                         }
                     }
                     Err(e) => err = Some(e),
@@ -950,7 +1122,9 @@ impl Detector {
                 }
             }
             self.ind.accept_pv();
-            self.ind.accept_imu();
+            if self.flying() {
+                self.ind.accept_imu();
+            }
         }
         let driver = ind.r_driver().map_or(255, |g| g as u8);
         Output {
@@ -995,38 +1169,47 @@ impl Detector {
     /// Misclassified D0 samples at the configured threshold.
     fn d0_errors(&self, a: &Anfis) -> usize {
         let th = self.cfg.threshold;
-        self.d0_x.iter().zip(&self.d0_y).filter(|(x, y)| (a.eval(x) >= th) != (**y >= 0.5)).count()
+        self.d0_x
+            .iter()
+            .zip(&self.d0_y)
+            .filter(|(x, y)| (a.eval(x) >= th) != (**y >= 0.5))
+            .count()
     }
 }
 
 /// Valid ranges per column: a value outside is an input error.
 fn range_of(i: usize) -> (f64, f64) {
     match i {
-        0 => (-1e12, 1e12),            // t, s
-        1 => (-90.0, 90.0),            // lat
-        2 => (-180.0, 180.0),          // lon
-        3 => (-2000.0, 1e5),           // alt, m
-        4..=6 => (-1e7, 1e7),          // pn/pe/pd, m
-        7..=9 => (-2000.0, 2000.0),    // velocity, m/s
-        10 => (0.0, 100.0),            // fix
-        11 => (0.0, 1000.0),           // sats
-        12 | 13 => (0.0, 1e12),        // eph/epv, m
-        14..=16 => (-2000.0, 2000.0),  // accel, m/s²
-        17..=19 => (-200.0, 200.0),    // gyro, rad/s
-        20..=23 => (-2.0, 2.0),        // quaternion
-        24 => (-2000.0, 1e5),          // baro, m
+        0 => (-1e12, 1e12),           // t, s
+        1 => (-90.0, 90.0),           // lat
+        2 => (-180.0, 180.0),         // lon
+        3 => (-2000.0, 1e5),          // alt, m
+        4..=6 => (-1e7, 1e7),         // pn/pe/pd, m
+        7..=9 => (-2000.0, 2000.0),   // velocity, m/s
+        10 => (0.0, 100.0),           // fix
+        11 => (0.0, 1000.0),          // sats
+        12 | 13 => (0.0, 1e12),       // eph/epv, m
+        14..=16 => (-2000.0, 2000.0), // accel, m/s²
+        17..=19 => (-200.0, 200.0),   // gyro, rad/s
+        20..=23 => (-2.0, 2.0),       // quaternion
+        24 => (-2000.0, 1e5),         // baro, m
         _ => (f64::NEG_INFINITY, f64::INFINITY),
     }
 }
 
-const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] = [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
+const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] =
+    [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
 
 /// Check one row: `t` present and finite, no infinities, every value in its
 /// range, sensor groups complete (all three axes or none).
 pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
     use crate::sample::COLUMNS;
     if !s.t.is_finite() {
-        return Err(InputError { row, field: "t", reason: format!("required and must be finite, got {}", s.t) });
+        return Err(InputError {
+            row,
+            field: "t",
+            reason: format!("required and must be finite, got {}", s.t),
+        });
     }
     for (i, name) in COLUMNS.iter().enumerate() {
         let v = s.get(i);
@@ -1035,14 +1218,30 @@ pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
         }
         let (lo, hi) = range_of(i);
         if !v.is_finite() || v < lo || v > hi {
-            return Err(InputError { row, field: name, reason: format!("value {v} outside [{lo}, {hi}]") });
+            return Err(InputError {
+                row,
+                field: name,
+                reason: format!("value {v} outside [{lo}, {hi}]"),
+            });
         }
     }
-    for g in GROUPS_ALL_OR_NONE.iter().map(|g| g.as_slice()).chain(core::iter::once([20usize, 21, 22, 23].as_slice())) {
+    for g in GROUPS_ALL_OR_NONE
+        .iter()
+        .map(|g| g.as_slice())
+        .chain(core::iter::once([20usize, 21, 22, 23].as_slice()))
+    {
         let present = g.iter().filter(|&&i| !s.get(i).is_nan()).count();
         if present != 0 && present != g.len() {
-            let missing = g.iter().find(|&&i| s.get(i).is_nan()).copied().unwrap_or(g[0]);
-            let have = g.iter().find(|&&i| !s.get(i).is_nan()).copied().unwrap_or(g[0]);
+            let missing = g
+                .iter()
+                .find(|&&i| s.get(i).is_nan())
+                .copied()
+                .unwrap_or(g[0]);
+            let have = g
+                .iter()
+                .find(|&&i| !s.get(i).is_nan())
+                .copied()
+                .unwrap_or(g[0]);
             return Err(InputError {
                 row,
                 field: COLUMNS[missing],
@@ -1051,7 +1250,11 @@ pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
         }
     }
     if s.has_attitude() && quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_none() {
-        return Err(InputError { row, field: "qw", reason: "quaternion norm must be near 1".into() });
+        return Err(InputError {
+            row,
+            field: "qw",
+            reason: "quaternion norm must be near 1".into(),
+        });
     }
     Ok(())
 }

@@ -17,10 +17,10 @@ pub mod methods;
 pub mod metrics;
 pub mod sample;
 pub mod sim;
-pub mod thresholds;
-pub mod ugv;
-pub mod tight;
 pub mod snapshot;
+pub mod thresholds;
+pub mod tight;
+pub mod ugv;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;

@@ -38,7 +38,11 @@ fn battery() -> Vec<Scenario> {
             v.push(Scenario::with_fault(*kind, *m, start, 15.0, next()));
         }
     }
-    for tr in [Trajectory::Paper, Trajectory::Aggressive, Trajectory::Survey] {
+    for tr in [
+        Trajectory::Paper,
+        Trajectory::Aggressive,
+        Trajectory::Survey,
+    ] {
         v.push(Scenario::clean(tr, next(), 250.0));
     }
     let mut g = Scenario::paper(OutageMode::Degraded, next());
