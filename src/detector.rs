@@ -970,6 +970,9 @@ impl Detector {
             self.in_episode = false;
             self.imu_episode = false;
         }
+        // While the IMU is the suspect, its bias estimate is not learnt from
+        // the fault (or the test would see the learnt error after it ends).
+        kf.set_hold_bias(self.imu_episode);
 
         // Gate: during a fault, withhold the sensors that departed. GPS
         // position and velocity come from one receiver and go together.

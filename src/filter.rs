@@ -153,6 +153,11 @@ pub struct Kf {
     pub noise: FilterNoise,
     baro_initialised: bool,
     pending: Pending,
+    /// Hold the accelerometer-bias estimate: updates leave it (and its
+    /// covariance) alone, as a "consider" state. Set while the IMU itself is
+    /// suspected, so the filter does not learn a fault as the sensor's bias
+    /// and carry that error past the fault's end.
+    hold_bias: bool,
 }
 
 impl Kf {
@@ -181,7 +186,13 @@ impl Kf {
             noise,
             baro_initialised: false,
             pending: Pending::default(),
+            hold_bias: false,
         }
+    }
+
+    /// Hold (or release) the accelerometer-bias estimate (see `hold_bias`).
+    pub fn set_hold_bias(&mut self, hold: bool) {
+        self.hold_bias = hold;
     }
 
     pub fn position(&self) -> Vector3<f64> {
@@ -466,13 +477,15 @@ impl Kf {
         if !(s.is_finite() && s > 0.0) {
             return Err(FilterError::CovarianceUnhealthy(0));
         }
-        let k: [f64; N] = core::array::from_fn(|i| ph[i] / s);
+        let held = |i: usize| self.hold_bias && (IB..IB + 3).contains(&i);
+        let k: [f64; N] = core::array::from_fn(|i| if held(i) { 0.0 } else { ph[i] / s });
         let nu = y - hx;
         for i in 0..N {
             self.x[i] += k[i] * nu;
         }
         // Joseph form (I−khᵀ)P(I−khᵀ)ᵀ + r kkᵀ, expanded for a scalar
         // measurement: P − k phᵀ − ph kᵀ + s kkᵀ with ph = Ph, s = hᵀPh + r.
+        // It holds for any gain, so zeroing the held bias rows keeps P exact.
         // Symmetric term by term: the upper triangle is computed and mirrored,
         // O(n²) instead of two n³ products.
         for i in 0..N {
@@ -697,6 +710,78 @@ mod tests {
     }
 
     #[test]
+    fn held_bias_is_left_alone_and_p_is_the_joseph_form_of_that_gain() {
+        let mut kf = Kf::new(
+            FilterNoise::default(),
+            Vector3::zeros(),
+            Vector3::zeros(),
+            2.0,
+            0.5,
+        );
+        let imu = ImuInput {
+            f_body: Vector3::new(0.3, -0.2, -9.81),
+            q: level(),
+        };
+        kf.predict(1.0, Some(&imu)).unwrap();
+        kf.flush().unwrap();
+        kf.set_hold_bias(true);
+        let (x0, p0) = (kf.x, kf.P);
+        kf.update_velocity(&Vector3::new(0.4, 0.0, 0.0)).unwrap();
+        // Bias and its covariance untouched; velocity N moved towards 0.4.
+        for i in IB..IB + 3 {
+            assert_eq!(kf.x[i], x0[i]);
+            for j in IB..IB + 3 {
+                assert_abs_diff_eq!(kf.P[(i, j)], p0[(i, j)], epsilon = 1e-15);
+            }
+        }
+        assert!(
+            kf.x[IV] > x0[IV] + 0.01,
+            "velocity {} -> {}",
+            x0[IV],
+            kf.x[IV]
+        );
+        // The first scalar update against the dense Joseph form with the
+        // bias rows of K zeroed: (I − khᵀ)P(I − khᵀ)ᵀ + r kkᵀ.
+        let mut kf1 = Kf::new(
+            FilterNoise::default(),
+            Vector3::zeros(),
+            Vector3::zeros(),
+            2.0,
+            0.5,
+        );
+        kf1.predict(1.0, Some(&imu)).unwrap();
+        kf1.flush().unwrap();
+        kf1.set_hold_bias(true);
+        let p = kf1.P;
+        let r = kf1.noise.gps_vel * kf1.noise.gps_vel;
+        let mut h = StateVec::zeros();
+        h[IV] = 1.0;
+        let mut k = p * h / (h.dot(&(p * h)) + r);
+        for i in IB..IB + 3 {
+            k[i] = 0.0;
+        }
+        let a = StateMat::identity() - k * h.transpose();
+        let dense = a * p * a.transpose() + k * k.transpose() * r;
+        kf1.scalar_update(&[(IV, 1.0)], 0.4, r).unwrap();
+        assert!(
+            (kf1.P - dense).abs().max() < 1e-12,
+            "{}",
+            (kf1.P - dense).abs().max()
+        );
+        // Without the hold the same update moves the bias.
+        let mut kf2 = Kf::new(
+            FilterNoise::default(),
+            Vector3::zeros(),
+            Vector3::zeros(),
+            2.0,
+            0.5,
+        );
+        kf2.predict(1.0, Some(&imu)).unwrap();
+        kf2.update_velocity(&Vector3::new(0.4, 0.0, 0.0)).unwrap();
+        assert!((kf2.accel_bias() - x0.fixed_rows::<3>(IB)).norm() > 1e-4);
+    }
+
+    #[test]
     fn non_finite_input_is_an_error_not_a_panic() {
         let mut kf = Kf::new(
             FilterNoise::default(),
@@ -721,10 +806,13 @@ mod tests {
         fn covariance_stays_symmetric_psd(
             steps in proptest::collection::vec((0.001f64..0.5, -20.0f64..20.0, -20.0f64..20.0, -30.0f64..10.0, 0u8..4), 1..120),
             yaw in -3.2f64..3.2, pitch in -0.8f64..0.8,
+            hold_mask in proptest::prelude::any::<u64>(),
         ) {
             let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 3.0, 1.0);
             let q = UnitQuaternion::from_euler_angles(0.1, pitch, yaw);
-            for (dt, a, b, c, kind) in steps {
+            for (i, (dt, a, b, c, kind)) in steps.into_iter().enumerate() {
+                // The bias hold (a suboptimal gain) must keep P valid too.
+                kf.set_hold_bias((hold_mask >> (i % 64)) & 1 == 1);
                 let imu = ImuInput { f_body: Vector3::new(a, b, c), q };
                 kf.predict(dt, if kind == 3 { None } else { Some(&imu) }).unwrap();
                 match kind {
