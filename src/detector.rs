@@ -1182,6 +1182,34 @@ impl Detector {
 
 /// Valid ranges per column: a value outside is an input error.
 fn range_of(i: usize) -> (f64, f64) {
+    range_of_const(i)
+}
+
+const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] =
+    [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
+
+/// Lower and upper bounds per column (see `range_of`), as tables for the
+/// fast path.
+const LO: [f64; 25] = {
+    let mut a = [0.0; 25];
+    let mut i = 0;
+    while i < 25 {
+        a[i] = range_of_const(i).0;
+        i += 1;
+    }
+    a
+};
+const HI: [f64; 25] = {
+    let mut a = [0.0; 25];
+    let mut i = 0;
+    while i < 25 {
+        a[i] = range_of_const(i).1;
+        i += 1;
+    }
+    a
+};
+
+const fn range_of_const(i: usize) -> (f64, f64) {
     match i {
         0 => (-1e12, 1e12),           // t, s
         1 => (-90.0, 90.0),           // lat
@@ -1200,12 +1228,42 @@ fn range_of(i: usize) -> (f64, f64) {
     }
 }
 
-const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] =
-    [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
+/// The common case in one branch-free pass: every value NaN or inside its
+/// range (an infinity is outside every range), `t` present, and every
+/// three-axis group and the quaternion all present or all absent. Rows that
+/// fail it go through [`validate_sample`]'s detailed checks for the message.
+#[inline]
+fn row_is_plainly_valid(s: &Sample) -> bool {
+    let v = [
+        s.t, s.lat, s.lon, s.alt, s.pn, s.pe, s.pd, s.vn, s.ve, s.vd, s.fix, s.sats, s.eph, s.epv,
+        s.ax, s.ay, s.az, s.gx, s.gy, s.gz, s.qw, s.qx, s.qy, s.qz, s.baro,
+    ];
+    let mut ok = !v[0].is_nan();
+    for i in 0..25 {
+        ok &= v[i].is_nan() | ((v[i] >= LO[i]) & (v[i] <= HI[i]));
+    }
+    let nan = |i: usize| v[i].is_nan() as u8;
+    let group = |a: usize, n: usize| {
+        let c: u8 = (a..a + n).map(nan).sum();
+        c == 0 || c as usize == n
+    };
+    ok &= !s.label.is_infinite();
+    ok && group(1, 3) && group(4, 3) && group(7, 3) && group(14, 3) && group(17, 3) && group(20, 4)
+}
 
 /// Check one row: `t` present and finite, no infinities, every value in its
 /// range, sensor groups complete (all three axes or none).
 pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
+    if row_is_plainly_valid(s)
+        && (s.qw.is_nan() || quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_some())
+    {
+        return Ok(());
+    }
+    validate_detailed(s, row)
+}
+
+/// The checks one by one, naming the first field that fails.
+fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
     use crate::sample::COLUMNS;
     if !s.t.is_finite() {
         return Err(InputError {
@@ -1260,4 +1318,72 @@ pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A bad or edge value for column `i`: the bounds, just outside them,
+    /// the infinities, NaN.
+    fn edge(i: usize, k: usize) -> f64 {
+        let (lo, hi) = range_of(i);
+        [
+            lo,
+            hi,
+            lo - 1.0,
+            hi + 1.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ][k % 7]
+    }
+
+    proptest! {
+        /// The fast path accepts exactly the rows the field-by-field checks
+        /// accept: a valid row (each sensor group present or absent, a unit
+        /// quaternion) with up to three fields set to edge values.
+        #[test]
+        fn fast_validation_agrees_with_the_detailed_checks(
+            present in proptest::collection::vec(any::<bool>(), 8),
+            vals in proptest::collection::vec(-1.0f64..1.0, 26),
+            edits in proptest::collection::vec((0..26usize, 0..7usize), 0..4),
+        ) {
+            let mut s = Sample::at(10.0);
+            // Groups: lat/lon/alt, pn/pe/pd, v, accel, gyro, quaternion, then
+            // single columns fix..epv and baro, label.
+            let groups: [&[usize]; 8] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23], &[10, 11, 12, 13], &[24, 25]];
+            for (g, cols) in groups.iter().enumerate() {
+                if present[g] {
+                    for &c in cols.iter() {
+                        let (lo, hi) = range_of(c);
+                        let (lo, hi) = (lo.max(-1e3), hi.min(1e3));
+                        s.set(c, 0.5 * (lo + hi) + 0.5 * (hi - lo) * vals[c]);
+                    }
+                }
+            }
+            if present[5] {
+                let n = (s.qw * s.qw + s.qx * s.qx + s.qy * s.qy + s.qz * s.qz).sqrt().max(1e-3);
+                (s.qw, s.qx, s.qy, s.qz) = (s.qw / n, s.qx / n, s.qy / n, s.qz / n);
+            }
+            prop_assert!(validate_sample(&s, 7).is_ok() && validate_detailed(&s, 7).is_ok(), "{:?}", s);
+            for (c, k) in edits {
+                s.set(c, edge(c, k));
+            }
+            prop_assert_eq!(validate_sample(&s, 7).is_ok(), validate_detailed(&s, 7).is_ok(), "{:?}", s);
+        }
+    }
+
+    #[test]
+    fn a_unit_quaternion_row_passes_and_a_half_quaternion_fails() {
+        let mut s = Sample::at(1.0);
+        (s.qw, s.qx, s.qy, s.qz) = (1.0, 0.0, 0.0, 0.0);
+        assert!(validate_sample(&s, 0).is_ok());
+        s.qy = f64::NAN;
+        let e = validate_sample(&s, 3).unwrap_err();
+        assert_eq!((e.row, e.field), (3, "qy"));
+        (s.qw, s.qx, s.qy, s.qz) = (0.3, 0.0, 0.0, 0.0);
+        assert_eq!(validate_sample(&s, 0).unwrap_err().field, "qw");
+    }
 }

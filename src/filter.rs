@@ -285,32 +285,30 @@ impl Kf {
                 m[3 + i][j] = accv;
             }
         }
-        // E's row r, column c (r < 6): the same blocks as above.
-        let e = |r: usize, c: usize| -> f64 {
-            match (r, c) {
-                (0..=2, 3..=5) if c - 3 == r => pd.t,
-                (0..=2, 6..=8) => pd.phi_pb[(r, c - 6)],
-                (3..=5, 6..=8) => pd.phi_vb[(r - 3, c - 6)],
-                _ => 0.0,
-            }
-        };
+        // P + M + Mᵀ + M Eᵀ by region, each entry summed in the order
+        // m[i][j] + m[j][i] + Σ_k m[i][k] E[j][k] (E's nonzero entries only:
+        // row j < 3 has t at column 3 + j and phi_pb in 6..9, rows 3..6 have
+        // phi_vb in 6..9), so no structural zero is multiplied.
         let mut p_new = self.P;
-        for i in 0..N {
-            for j in 0..N {
-                let mut v = 0.0;
-                if i < 6 {
-                    v += m[i][j];
-                }
-                if j < 6 {
-                    v += m[j][i];
-                }
-                if i < 6 && j < 6 {
-                    // (M Eᵀ)[i][j] = Σ_k M[i][k] E[j][k], E[j][k] ≠ 0 for k in 3..9.
-                    for k in 3..9 {
-                        v += m[i][k] * e(j, k);
-                    }
+        for i in 0..6 {
+            for j in 0..3 {
+                let mut v = m[i][j] + m[j][i];
+                v += m[i][3 + j] * pd.t;
+                for k in 0..3 {
+                    v += m[i][6 + k] * pd.phi_pb[(j, k)];
                 }
                 p_new[(i, j)] += v;
+            }
+            for j in 3..6 {
+                let mut v = m[i][j] + m[j][i];
+                for k in 0..3 {
+                    v += m[i][6 + k] * pd.phi_vb[(j - 3, k)];
+                }
+                p_new[(i, j)] += v;
+            }
+            for j in 6..N {
+                p_new[(i, j)] += m[i][j];
+                p_new[(j, i)] += m[i][j];
             }
         }
         for i in 0..3 {

@@ -137,7 +137,16 @@ fn the_imu_test_does_not_outlive_a_gps_fault() {
 #[test]
 fn a_detected_accel_bias_is_not_learnt_into_the_filter() {
     for (seed, start) in [(11u64, 80.0), (12, 150.0), (13, 200.0)] {
-        let m = run(&Scenario::with_fault(FaultKind::AccelBias, 1.0, start, 15.0, seed));
-        assert!(m.detected_intervals == 1 && m.fp <= 40, "seed {seed} at {start} s: {m:?}");
+        let m = run(&Scenario::with_fault(
+            FaultKind::AccelBias,
+            1.0,
+            start,
+            15.0,
+            seed,
+        ));
+        assert!(
+            m.detected_intervals == 1 && m.fp <= 40,
+            "seed {seed} at {start} s: {m:?}"
+        );
     }
 }
