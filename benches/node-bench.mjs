@@ -19,8 +19,8 @@ function best(k, f) {
   return b;
 }
 
-const whole = best(7, () => { const d = new ng.Detector({ tc: 100 }); d.pushColumns(cols); d.free(); });
-const noRetrain = best(7, () => { const d = new ng.Detector({ retrain: false }); d.pushColumns(cols); d.free(); });
+const whole = best(15, () => { const d = new ng.Detector({ tc: 100 }); d.pushColumns(cols); d.free(); });
+const noRetrain = best(25, () => { const d = new ng.Detector({ retrain: false }); d.pushColumns(cols); d.free(); });
 const names = Object.keys(cols);
 const objs = Array.from({ length: n }, (_, i) => { const s = {}; for (const k of names) if (!Number.isNaN(cols[k][i])) s[k] = cols[k][i]; return s; });
 const push = best(5, () => { const d = new ng.Detector({ retrain: false }); for (const s of objs) d.push(s); d.free(); });

@@ -285,11 +285,12 @@ impl Kf {
                 m[3 + i][j] = accv;
             }
         }
-        // P + M + Mᵀ + M Eᵀ by region, each entry summed in the order
+        // P + M + Mᵀ + M Eᵀ by region, in place (M holds everything read
+        // from the old P), each entry summed in the order
         // m[i][j] + m[j][i] + Σ_k m[i][k] E[j][k] (E's nonzero entries only:
         // row j < 3 has t at column 3 + j and phi_pb in 6..9, rows 3..6 have
         // phi_vb in 6..9), so no structural zero is multiplied.
-        let mut p_new = self.P;
+        let P = &mut self.P;
         for i in 0..6 {
             for j in 0..3 {
                 let mut v = m[i][j] + m[j][i];
@@ -297,31 +298,37 @@ impl Kf {
                 for k in 0..3 {
                     v += m[i][6 + k] * pd.phi_pb[(j, k)];
                 }
-                p_new[(i, j)] += v;
+                P[(i, j)] += v;
             }
             for j in 3..6 {
                 let mut v = m[i][j] + m[j][i];
                 for k in 0..3 {
                     v += m[i][6 + k] * pd.phi_vb[(j - 3, k)];
                 }
-                p_new[(i, j)] += v;
+                P[(i, j)] += v;
             }
             for j in 6..N {
-                p_new[(i, j)] += m[i][j];
-                p_new[(j, i)] += m[i][j];
+                P[(i, j)] += m[i][j];
+                P[(j, i)] += m[i][j];
             }
         }
         for i in 0..3 {
-            p_new[(IP + i, IP + i)] += pd.q11;
-            p_new[(IP + i, IV + i)] += pd.q12;
-            p_new[(IV + i, IP + i)] += pd.q12;
-            p_new[(IV + i, IV + i)] += pd.q22;
-            p_new[(IB + i, IB + i)] += pd.qb;
+            P[(IP + i, IP + i)] += pd.q11;
+            P[(IP + i, IV + i)] += pd.q12;
+            P[(IV + i, IP + i)] += pd.q12;
+            P[(IV + i, IV + i)] += pd.q22;
+            P[(IB + i, IB + i)] += pd.qb;
         }
-        p_new[(IBARO, IBARO)] += pd.qbaro;
-        // Symmetrise once per propagation: the scalar updates keep symmetry
-        // term by term, up to rounding.
-        self.P = (p_new + p_new.transpose()) * 0.5;
+        P[(IBARO, IBARO)] += pd.qbaro;
+        // Symmetrise once per propagation (the scalar updates keep symmetry
+        // term by term, up to rounding): (a + b)/2 into both halves.
+        for i in 0..N {
+            for j in i + 1..N {
+                let v = (P[(i, j)] + P[(j, i)]) * 0.5;
+                P[(i, j)] = v;
+                P[(j, i)] = v;
+            }
+        }
         self.check_health()
     }
 

@@ -125,6 +125,41 @@ impl Sample {
         }
     }
 
+    /// Row `j` of 26 columns in [`COLUMNS`] order; a column shorter than
+    /// `j + 1` reads as NaN (absent).
+    #[inline]
+    pub fn from_columns(c: &[&[f64]; 26], j: usize) -> Self {
+        let g = |i: usize| c[i].get(j).copied().unwrap_or(f64::NAN);
+        Sample {
+            t: g(0),
+            lat: g(1),
+            lon: g(2),
+            alt: g(3),
+            pn: g(4),
+            pe: g(5),
+            pd: g(6),
+            vn: g(7),
+            ve: g(8),
+            vd: g(9),
+            fix: g(10),
+            sats: g(11),
+            eph: g(12),
+            epv: g(13),
+            ax: g(14),
+            ay: g(15),
+            az: g(16),
+            gx: g(17),
+            gy: g(18),
+            gz: g(19),
+            qw: g(20),
+            qx: g(21),
+            qy: g(22),
+            qz: g(23),
+            baro: g(24),
+            label: g(25),
+        }
+    }
+
     /// Set a field by column index (see [`COLUMNS`]); out-of-range is ignored.
     pub fn set(&mut self, i: usize, v: f64) {
         let slot = match i {
@@ -200,5 +235,25 @@ impl Sample {
     /// Barometric altitude present.
     pub fn has_baro(&self) -> bool {
         self.baro.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn from_columns_reads_every_field_in_column_order() {
+        let cols: Vec<Vec<f64>> = (0..26)
+            .map(|i| vec![100.0 + i as f64, 200.0 + i as f64])
+            .collect();
+        let mut c: [&[f64]; 26] = core::array::from_fn(|i| cols[i].as_slice());
+        let s = Sample::from_columns(&c, 1);
+        for i in 0..26 {
+            assert_eq!(s.get(i), 200.0 + i as f64, "column {}", COLUMNS[i]);
+        }
+        // A short column is absent, not a panic.
+        c[24] = &[];
+        assert!(Sample::from_columns(&c, 1).baro.is_nan());
     }
 }

@@ -312,15 +312,18 @@ impl Detector {
         let base = self.inner.stats().rows;
         // Assemble and validate every row (time order included) before
         // touching state, so a rejected batch changes nothing.
-        self.rows.clear();
-        self.rows.resize(n, Sample::default());
+        // Absent columns read as NaN; then one pass builds each row from
+        // the 26 columns (no per-value dispatch on the column index).
         for (i, p) in present.iter().enumerate() {
-            if *p {
-                for (row, v) in self.rows.iter_mut().zip(&self.cols[i][..n]) {
-                    row.set(i, *v);
-                }
+            if !*p {
+                self.cols[i].clear();
+                self.cols[i].resize(n, f64::NAN);
             }
         }
+        let c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| &self.cols[i][..n]);
+        self.rows.clear();
+        self.rows
+            .extend((0..n).map(|j| Sample::from_columns(&c, j)));
         let mut last_t = f64::NEG_INFINITY;
         for (j, s) in self.rows.iter().enumerate() {
             self.inner
