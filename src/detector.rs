@@ -302,6 +302,11 @@ const IMU_TIMEOUT: f64 = 0.25; // s: older IMU is not used for prediction
 /// ground's (on the real Loiter log, take-off alone reaches 3–6).
 const IMU_ARM_S: f64 = 20.0;
 const IMU_ARM_WINDOWS: u32 = 50;
+/// An IMU episode ends when z's change over the last `IMU_RECENT_S` s stays
+/// below `IMU_CALM` σ for `RECOVER_EPOCHS` epochs. A 0.3 m/s² bias moves z by
+/// about 3σ in that second.
+const IMU_RECENT_S: f64 = 1.0;
+const IMU_CALM: f64 = 1.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
@@ -377,6 +382,8 @@ pub struct Detector {
     /// the window that judges the clean epochs after it.
     in_episode: bool,
     imu_episode: bool,
+    /// Consecutive IMU-episode epochs whose last second was calm.
+    imu_calm: u32,
     /// Consecutive baro samples consistent with the filter while withheld.
     baro_calm: u32,
     last: Output,
@@ -453,6 +460,7 @@ impl Detector {
             flight_time: 0.0,
             in_episode: false,
             imu_episode: false,
+            imu_calm: 0,
             baro_calm: 0,
             last: Output {
                 kind: kind::NO_GPS,
@@ -965,10 +973,23 @@ impl Detector {
             }
             if !self.imu_episode {
                 self.ind.clear_imu();
+            } else if !self.oracle && self.ind.r_unfolded() < GATE {
+                // The 3 s window still spans the fault for 3 s after it
+                // ends; the last second says sooner whether z still drifts.
+                // Calm for a few epochs: the episode is over, and the window
+                // restarts on post-fault data.
+                let calm = self.ind.imu_recent(IMU_RECENT_S) < IMU_CALM;
+                self.imu_calm = if calm { self.imu_calm + 1 } else { 0 };
+                if self.imu_calm >= RECOVER_EPOCHS {
+                    fault = false;
+                    self.ind.clear_imu();
+                }
             }
-        } else {
+        }
+        if !fault {
             self.in_episode = false;
             self.imu_episode = false;
+            self.imu_calm = 0;
         }
         // While the IMU is the suspect, its bias estimate is not learnt from
         // the fault (or the test would see the learnt error after it ends).

@@ -571,6 +571,30 @@ impl<const D: usize> LagTest<D> {
         }
     }
 
+    /// The statistic over the most recent `dt` s only (newest entry against
+    /// the newest one at least `dt` older, baseline removed, no hold
+    /// scaling); NaN when the window holds no such pair.
+    pub fn recent(&self, dt: f64) -> f64 {
+        if self.len < 2 {
+            return f64::NAN;
+        }
+        let cap = self.ring.len();
+        let (tn, zn) = self.ring[(self.head + cap - 1) % cap];
+        for k in 2..=self.len {
+            let (t0, z0) = self.ring[(self.head + cap - k) % cap];
+            if tn - t0 >= dt {
+                let span = tn - t0;
+                let mut z2 = 0.0;
+                for a in 0..D {
+                    let z = (zn[a] - z0[a] - self.rate[a] * span) / self.sigma(a);
+                    z2 += z * z;
+                }
+                return (z2 / D as f64).sqrt();
+            }
+        }
+        f64::NAN
+    }
+
     /// Windows learnt from so far.
     pub fn learnt(&self) -> u32 {
         self.learnt
@@ -971,6 +995,11 @@ impl IndicatorEngine {
         self.imu_fold
     }
 
+    /// The IMU consistency over its most recent `dt` s (see `LagTest::recent`).
+    pub fn imu_recent(&self, dt: f64) -> f64 {
+        self.imu.recent(dt)
+    }
+
     /// IMU consistency windows learnt from so far.
     pub fn imu_learnt(&self) -> u32 {
         self.imu.learnt()
@@ -1332,5 +1361,26 @@ mod tests {
         s.push(4.0, [0.6]);
         s.accept();
         assert!(s.sigma(0) > 0.98, "σ {}", s.sigma(0));
+    }
+
+    #[test]
+    fn lag_test_recent_uses_the_last_second_only() {
+        // σ = 1 (α = 0), T = 3 s, entries every 0.5 s: z drifts 1/s until
+        // t = 2, then stays. The window statistic still sees the drift; the
+        // last second does not.
+        let mut l = LagTest::<1>::new(16, 3.0, 1.0, 0.5, 0.0, 0.0, false);
+        assert!(l.recent(1.0).is_nan());
+        for k in 0..=8 {
+            let t = 0.5 * k as f64;
+            l.push(t, [t.min(2.0)]);
+        }
+        // Newest t = 4 (z = 2); window: oldest t = 1 (z = 1): Δz = 1.
+        assert_abs_diff_eq!(l.push(4.0, [2.0]), 1.0, epsilon = 1e-12);
+        // Last second: t = 3 → 4, Δz = 0.
+        assert_abs_diff_eq!(l.recent(1.0), 0.0, epsilon = 1e-12);
+        // Last 2.5 s: t = 1.5 (z = 1.5) → 4: Δz = 0.5.
+        assert_abs_diff_eq!(l.recent(2.5), 0.5, epsilon = 1e-12);
+        // Longer than the ring holds: NaN.
+        assert!(l.recent(10.0).is_nan());
     }
 }
