@@ -104,6 +104,8 @@
 //!   zeroed GPS velocity) restarts its window at every epoch, so those GPS
 //!   velocities never sit in the window that judges the clean epochs after
 //!   the fault;
+//! - an IMU episode ends when the last second of `z` is calm (below 1σ for
+//!   5 epochs) rather than when the whole 3 s window has left the fault;
 //! - it condemns the IMU, not the GPS: the detector withholds the GPS
 //!   velocity only on the velocity group's own R, does not end an
 //!   IMU-driven episode by re-anchoring on a GPS that never departed, and

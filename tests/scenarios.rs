@@ -133,9 +133,11 @@ fn the_imu_test_does_not_outlive_a_gps_fault() {
 /// Regression: the filter once learnt part of a detected 1 m/s² bias into
 /// its bias state, and the IMU test then flagged that learnt error for
 /// 45 s after the fault ended (542 false alarms on this flight). The bias
-/// estimate is now held while the IMU is the suspect.
+/// estimate is now held while the IMU is the suspect. And the episode ends
+/// on the last second of the IMU test, not after its whole 3 s window has
+/// left the fault (25–28 false alarms per flight before, 13–17 after).
 #[test]
-fn a_detected_accel_bias_is_not_learnt_into_the_filter() {
+fn a_detected_accel_bias_is_not_learnt_into_the_filter_and_ends_promptly() {
     for (seed, start) in [(11u64, 80.0), (12, 150.0), (13, 200.0)] {
         let m = run(&Scenario::with_fault(
             FaultKind::AccelBias,
@@ -145,7 +147,7 @@ fn a_detected_accel_bias_is_not_learnt_into_the_filter() {
             seed,
         ));
         assert!(
-            m.detected_intervals == 1 && m.fp <= 40,
+            m.detected_intervals == 1 && m.fp <= 20 && m.r#fn <= 10,
             "seed {seed} at {start} s: {m:?}"
         );
     }
