@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::config::Config;
 use crate::detector::{kind, Detector, Output};
-use crate::indicators::GROUP_NAMES;
+use crate::indicators::DRIVER_NAMES;
 use crate::logs::csv::CsvReader;
 use crate::logs::LogData;
 use crate::metrics::{self, Metrics};
@@ -480,7 +480,9 @@ fn track(
     let driver = if o.kind == kind::OUTAGE {
         "none"
     } else {
-        ind.r_driver().map_or("none", |g| GROUP_NAMES[g])
+        ind.r_driver()
+            .and_then(|g| DRIVER_NAMES.get(g).copied())
+            .unwrap_or("none")
     };
     // R is ≈1 when clean and C ≈ 0.2: compare relative excess.
     let indicator = if o.kind == kind::OUTAGE {

@@ -218,7 +218,8 @@ pub struct Output {
     pub kind: u8,
     /// Whether this row was a GPS epoch (a fix was evaluated).
     pub gps_epoch: bool,
-    /// Residual group that drove R (0 pos, 1 vel, 2 baro, 255 none).
+    /// What drove R (0 GPS position, 1 GPS velocity, 2 baro, 3 the IMU
+    /// through the IMU–GPS velocity consistency, 255 none).
     pub driver: u8,
 }
 

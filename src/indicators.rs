@@ -144,6 +144,9 @@ use serde::{Deserialize, Serialize};
 pub const GROUPS: usize = 3;
 /// Group names as reported.
 pub const GROUP_NAMES: [&str; GROUPS] = ["gps_position", "gps_velocity", "baro"];
+/// Names of what can drive R: the groups, then the IMU (index `GROUPS`),
+/// when the IMU consistency set the velocity group's R.
+pub const DRIVER_NAMES: [&str; GROUPS + 1] = ["gps_position", "gps_velocity", "baro", "imu"];
 /// Axes: pos N/E/D, vel N/E/D, baro.
 pub const AXES: usize = 7;
 
@@ -260,10 +263,16 @@ pub struct Indicators {
     /// IMU–GPS velocity consistency (NaN when unavailable: no IMU), folded
     /// into the velocity group's R once armed (see the module docs).
     pub imu: f64,
+    /// What the IMU consistency contributed to the velocity group's R
+    /// (`0.75·imu`), NaN while not folded in.
+    pub r_imu: f64,
 }
 
 impl Indicators {
-    /// The group that drove R (largest per-group R), if any.
+    /// What drove R, as an index into [`DRIVER_NAMES`]: the group with the
+    /// largest R, or `GROUPS` (the IMU) when that is the velocity group and
+    /// its R came from the IMU consistency, which condemns the IMU, not the
+    /// GPS velocity.
     pub fn r_driver(&self) -> Option<usize> {
         let mut best: Option<usize> = None;
         for g in 0..GROUPS {
@@ -271,6 +280,9 @@ impl Indicators {
             {
                 best = Some(g);
             }
+        }
+        if best == Some(1) && self.r_imu.is_finite() && self.r_imu >= self.r_group[1] {
+            return Some(GROUPS);
         }
         best
     }
@@ -763,6 +775,7 @@ impl IndicatorEngine {
                 pv: f64::NAN,
                 baro_cons: f64::NAN,
                 imu: f64::NAN,
+                r_imu: f64::NAN,
             },
             pv: PvTest::new(PV_WINDOW_FACTOR * w),
             baro: LagTest::new(
@@ -1067,6 +1080,7 @@ impl IndicatorEngine {
             pv: self.pv.stat,
             baro_cons: self.baro_pending,
             imu: self.imu_pending,
+            r_imu: f64::NAN,
         };
         let pv = core::mem::replace(&mut self.pv.stat, f64::NAN);
         let baro = core::mem::replace(&mut self.baro_pending, f64::NAN);
@@ -1090,7 +1104,8 @@ impl IndicatorEngine {
                     vel_unfolded = rg;
                 }
                 if g == 1 && self.imu_fold && imu.is_finite() {
-                    rg = rg.max(imu * IMU_R_SCALE);
+                    out.r_imu = imu * IMU_R_SCALE;
+                    rg = rg.max(out.r_imu);
                 }
                 out.r_group[g] = rg;
                 out.r = out.r.max(rg);

@@ -120,7 +120,7 @@ export interface PushResult { t: number; status: 0 | 1; f: number; r: number; c:
 export interface ColumnsResult { status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array }
 export interface DetectorStats { rows: number; gps_epochs: number; imu_rows: number; baro_rows: number; retrains: number; filter_resets: number; data_gaps: number; filter_errors: number }
 export interface Metrics { tp: number; fp: number; tn: number; fn: number; accuracy: number; falseAlarmRate: number; misdetectionRate: number; precision: number; recall: number; f2: number; meanDetectionDelay: number; faultIntervals: number; detectedIntervals: number }
-export interface FaultInterval { start: number; end: number; kind: "gps_outage" | "residual"; peakF: number; driver: string; indicator: "R" | "C" | "none"; rows: number }
+export interface FaultInterval { start: number; end: number; kind: "gps_outage" | "residual"; peakF: number; driver: "gps_position" | "gps_velocity" | "baro" | "imu" | "none"; indicator: "R" | "C" | "none"; rows: number }
 export interface AuditReport {
   format: "csv" | "ulog" | "dataflash"; rows: number; durationS: number; gpsEpochs: number; gpsRateHz: number; imuRateHz: number;
   gpsAvailable: boolean; gpsFixFraction: number; flaggedGpsEpochFraction: number;

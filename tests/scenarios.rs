@@ -152,3 +152,28 @@ fn a_detected_accel_bias_is_not_learnt_into_the_filter_and_ends_promptly() {
         );
     }
 }
+
+/// The audit names the IMU, not the GPS velocity, as what drove an
+/// accelerometer-bias fault; a zeroed GPS velocity is still blamed on the
+/// GPS velocity.
+#[test]
+fn the_audit_blames_the_imu_for_an_accel_bias_and_the_gps_for_zero_velocity() {
+    use navguard::audit::audit;
+    use navguard::logs::read_any;
+    use navguard::sim::to_csv;
+    for (preset, want) in [("accel-bias", "imu"), ("zero-velocity", "gps_velocity")] {
+        let sc = Scenario::preset(preset, 4).unwrap();
+        let csv = to_csv(&sc, &simulate(&sc).unwrap());
+        let log = read_any(csv.as_bytes()).unwrap();
+        let (report, _) = audit(&log, &Config::default()).unwrap();
+        let inside: Vec<_> = report
+            .faults
+            .iter()
+            .filter(|f| f.kind == "residual" && f.end >= 120.0 && f.start <= 135.0)
+            .collect();
+        assert!(
+            !inside.is_empty() && inside.iter().all(|f| f.driver == want),
+            "{preset}: {inside:?}"
+        );
+    }
+}
