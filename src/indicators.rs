@@ -113,9 +113,10 @@
 //!   1 m/s² fault learnt into that estimate kept the test up for 45 s after
 //!   the fault ended.
 //! On 30 simulated flights per magnitude (three trajectories, fault starts
-//! 40–200 s) it catches 23/30 at 0.2 m/s², 28/30 at 0.3, 30/30 at 0.5 and 1,
-//! with median delays of 1.9, 1.3, 1.0 and 0.4 s, while 85,000 clean epochs
-//! give 2 flags and the real logs' flagged shares do not change.
+//! 40–200 s, `examples/accel_probe.rs`) it catches 23/30 at 0.2 m/s², 28/30
+//! at 0.3, 30/30 at 0.5 and 1, with median delays of 2.1, 1.3, 1.0 and
+//! 0.5 s, while 85,000 clean epochs give 1 flag and the real logs' flagged
+//! shares do not change.
 //!
 //! **C-indicator (motion correlation).** Per group, the Pearson correlation
 //! through the origin between the consecutive `Δr_t` and the filter's own
