@@ -20,10 +20,7 @@ fn bench(c: &mut Criterion) {
         })
     });
     g.bench_function("paper_scenario_no_retrain", |b| {
-        let cfg = Config {
-            retrain: false,
-            ..Config::default()
-        };
+        let cfg = Config { retrain: false, ..Config::default() };
         b.iter(|| {
             let mut d = Detector::new(cfg.clone()).unwrap();
             for s in &rows {

@@ -10,9 +10,7 @@ fn clock() -> f64 {
 
 fn main() -> Result<(), String> {
     let mut args = std::env::args().skip(1);
-    let n: u64 = args
-        .next()
-        .map_or(Ok(5), |s| s.parse().map_err(|e| format!("seeds: {e}")))?;
+    let n: u64 = args.next().map_or(Ok(5), |s| s.parse().map_err(|e| format!("seeds: {e}")))?;
     let seeds: Vec<u64> = (1..=n).collect();
     let mut run = navguard::compare::CompareRun::new(&seeds, &[], Some(clock))?;
     for path in args {

@@ -29,10 +29,7 @@ fn main() {
         model.param_count()
     );
     let th = model.calibrate(&windows, 0.01).expect("calibrate");
-    println!(
-        "T2 {:.3} (normal {:.3}, empirical {:.3})",
-        th.t2, th.t2_normal, th.t2_empirical
-    );
+    println!("T2 {:.3} (normal {:.3}, empirical {:.3})", th.t2, th.t2_normal, th.t2_empirical);
 
     let reps = 2000;
     let mut scratch = GanScratch::default();
@@ -41,28 +38,16 @@ fn main() {
     let mut z: Option<Vec<f64>> = None;
     for i in 0..reps {
         let y = &windows[i % windows.len()];
-        let sc = model
-            .score_with(y, z.as_deref(), &mut scratch)
-            .expect("score");
+        let sc = model.score_with(y, z.as_deref(), &mut scratch).expect("score");
         acc += sc.score;
         z = Some(model.shift_latent(&sc.z, cfg.step).expect("shift"));
     }
     let per = t0.elapsed().as_secs_f64() / reps as f64;
-    println!(
-        "score (z_iters {}, warm start, scratch reused): {:.1} µs per window (checksum {acc:.3})",
-        cfg.z_iters,
-        per * 1e6
-    );
+    println!("score (z_iters {}, warm start, scratch reused): {:.1} µs per window (checksum {acc:.3})", cfg.z_iters, per * 1e6);
     let t0 = Instant::now();
     for i in 0..reps {
-        acc += model
-            .score(&windows[i % windows.len()], None)
-            .expect("score")
-            .score;
+        acc += model.score(&windows[i % windows.len()], None).expect("score").score;
     }
     let per = t0.elapsed().as_secs_f64() / reps as f64;
-    println!(
-        "score (cold start, fresh buffers): {:.1} µs per window (checksum {acc:.3})",
-        per * 1e6
-    );
+    println!("score (cold start, fresh buffers): {:.1} µs per window (checksum {acc:.3})", per * 1e6);
 }

@@ -18,11 +18,7 @@ fn run(rows: &[Sample], oracle: bool, trace: bool) -> (metrics::Metrics, String)
     let (mut t, mut l, mut st) = (vec![], vec![], vec![]);
     for s in rows {
         let o = det.push(s).unwrap();
-        if !s.label.is_nan()
-            && trace
-            && o.gps_epoch
-            && ((s.t * 10.0).round() as i64 % 5 == 0 || s.label == 1.0 || o.status == 1)
-        {
+        if !s.label.is_nan() && trace && o.gps_epoch && ((s.t * 10.0).round() as i64 % 5 == 0 || s.label == 1.0 || o.status == 1) {
             let i = det.indicators();
             println!(
                 "{:7.2} lab {} st {} k {} f {:6.3} r {:7.2} c {:5.2} pv {:5.2} bc {:5.2} im {:5.2} rg {:?} cg {:?} ig {:?}",

@@ -50,11 +50,7 @@ pub fn gauss(x: f64, c: f64, s: f64) -> f64 {
 #[inline]
 pub fn inputs(r: f64, c: f64) -> [f64; 2] {
     let r = if r.is_finite() { r.max(0.0) } else { 1e6 };
-    let c = if c.is_finite() {
-        c.clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
+    let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
     [libm::log1p(r), c]
 }
 
@@ -70,11 +66,7 @@ impl Anfis {
                 sigma[k][m] = (span / (2.0 * (M - 1) as f64)).max(MIN_SIGMA);
             }
         }
-        Anfis {
-            centre,
-            sigma,
-            conseq: [[0.0; CP]; RULES],
-        }
+        Anfis { centre, sigma, conseq: [[0.0; CP]; RULES] }
     }
 
     /// Normalised firing strengths (layers 1–3). Falls back to the nearest
@@ -185,11 +177,7 @@ impl Anfis {
                 sol = Some(ch.solve(&aty));
                 break;
             }
-            extra = if extra == 0.0 {
-                1e-6 * (1.0 + ata.diagonal().max())
-            } else {
-                extra * 10.0
-            };
+            extra = if extra == 0.0 { 1e-6 * (1.0 + ata.diagonal().max()) } else { extra * 10.0 };
         }
         let Some(sol) = sol else { return false };
         if !sol.iter().all(|v| v.is_finite()) {
@@ -209,14 +197,7 @@ impl Anfis {
         if n == 0 {
             return 0.0;
         }
-        xs.iter()
-            .zip(ys)
-            .map(|(x, y)| {
-                let e = self.eval(x) - y;
-                e * e
-            })
-            .sum::<f64>()
-            / n as f64
+        xs.iter().zip(ys).map(|(x, y)| { let e = self.eval(x) - y; e * e }).sum::<f64>() / n as f64
     }
 
     /// Gradient of the mean squared error w.r.t. premise parameters
@@ -313,11 +294,7 @@ impl Anfis {
 
     pub fn is_finite(&self) -> bool {
         self.centre.iter().flatten().all(|v| v.is_finite())
-            && self
-                .sigma
-                .iter()
-                .flatten()
-                .all(|v| v.is_finite() && *v > 0.0)
+            && self.sigma.iter().flatten().all(|v| v.is_finite() && *v > 0.0)
             && self.conseq.iter().flatten().all(|v| v.is_finite())
     }
 }
@@ -348,20 +325,9 @@ mod tests {
         let mut b = Anfis::init_grid([0.0, 0.0], [2.0, 1.0]);
         b.conseq[0] = [0.0, 0.0, 1.0];
         let x = [0.0, 0.0];
-        let mu0 = [
-            gauss(0.0, 0.0, 0.5),
-            gauss(0.0, 1.0, 0.5),
-            gauss(0.0, 2.0, 0.5),
-        ];
-        let mu1 = [
-            gauss(0.0, 0.0, 0.25),
-            gauss(0.0, 0.5, 0.25),
-            gauss(0.0, 1.0, 0.25),
-        ];
-        let total: f64 = mu0
-            .iter()
-            .map(|a| mu1.iter().map(|b| a * b).sum::<f64>())
-            .sum();
+        let mu0 = [gauss(0.0, 0.0, 0.5), gauss(0.0, 1.0, 0.5), gauss(0.0, 2.0, 0.5)];
+        let mu1 = [gauss(0.0, 0.0, 0.25), gauss(0.0, 0.5, 0.25), gauss(0.0, 1.0, 0.25)];
+        let total: f64 = mu0.iter().map(|a| mu1.iter().map(|b| a * b).sum::<f64>()).sum();
         assert_abs_diff_eq!(b.eval(&x), mu0[0] * mu1[0] / total, epsilon = 1e-12);
     }
 
@@ -398,20 +364,9 @@ mod tests {
         a.fit_consequents(&xs, &ys, 1e-6);
         let before = a.mse(&xs, &ys);
         let after = a.train_hybrid(&xs, &ys, 30, 0.05);
-        assert!(
-            after <= before,
-            "hybrid must not worsen: {before} -> {after}"
-        );
-        let wrong = xs
-            .iter()
-            .zip(&ys)
-            .filter(|(x, y)| (a.eval(x) >= 0.5) != (**y >= 0.5))
-            .count();
-        assert!(
-            (wrong as f64) < 0.08 * xs.len() as f64,
-            "misclassified {wrong}/{}",
-            xs.len()
-        );
+        assert!(after <= before, "hybrid must not worsen: {before} -> {after}");
+        let wrong = xs.iter().zip(&ys).filter(|(x, y)| (a.eval(x) >= 0.5) != (**y >= 0.5)).count();
+        assert!((wrong as f64) < 0.08 * xs.len() as f64, "misclassified {wrong}/{}", xs.len());
     }
 
     #[test]

@@ -137,10 +137,7 @@ impl Tally {
         }
         if let Some(lt) = self.last_t {
             if s.t - lt > self.cfg.data_gap && self.gaps.len() < MAX_LISTED {
-                self.gaps.push(Gap {
-                    start: lt,
-                    end: s.t,
-                });
+                self.gaps.push(Gap { start: lt, end: s.t });
             }
         }
         self.last_t = Some(s.t);
@@ -150,12 +147,7 @@ impl Tally {
             self.gps_reports += 1;
             self.gps_fixes += s.has_fix() as u64;
         }
-        let seen = [
-            s.has_position() || s.reports_no_fix(),
-            s.has_accel(),
-            s.has_attitude(),
-            s.has_baro(),
-        ];
+        let seen = [s.has_position() || s.reports_no_fix(), s.has_accel(), s.has_attitude(), s.has_baro()];
         for (a, b) in self.seen.iter_mut().zip(seen) {
             *a |= b;
         }
@@ -170,36 +162,11 @@ impl Tally {
 
     /// Inputs never seen, by the names `LogData::missing` uses.
     fn missing(&self) -> Vec<String> {
-        ["gps", "imu", "attitude", "baro"]
-            .iter()
-            .zip(self.seen)
-            .filter(|(_, s)| !s)
-            .map(|(n, _)| n.to_string())
-            .collect()
+        ["gps", "imu", "attitude", "baro"].iter().zip(self.seen).filter(|(_, s)| !s).map(|(n, _)| n.to_string()).collect()
     }
 
-    fn report(
-        self,
-        format: &'static str,
-        missing: Vec<String>,
-        meta: Vec<(String, String)>,
-    ) -> Report {
-        let Tally {
-            det,
-            metrics,
-            mut warnings,
-            bad_rows,
-            mut faults,
-            mut open,
-            gaps,
-            first_t,
-            last_t,
-            rows,
-            gps_reports,
-            gps_fixes,
-            flagged_epochs,
-            ..
-        } = self;
+    fn report(self, format: &'static str, missing: Vec<String>, meta: Vec<(String, String)>) -> Report {
+        let Tally { det, metrics, mut warnings, bad_rows, mut faults, mut open, gaps, first_t, last_t, rows, gps_reports, gps_fixes, flagged_epochs, .. } = self;
         if let Some(iv) = open.take() {
             faults.push(iv);
         }
@@ -215,10 +182,7 @@ impl Tally {
             });
         }
         for g in &gaps {
-            warnings.push(format!(
-                "data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)",
-                g.start, g.end
-            ));
+            warnings.push(format!("data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)", g.start, g.end));
         }
         let duration = match (first_t, last_t) {
             (Some(a), Some(b)) => b - a,
@@ -234,16 +198,8 @@ impl Tally {
             gps_rate_hz: st.gps_epochs as f64 / active,
             imu_rate_hz: st.imu_rows as f64 / active,
             gps_available: st.gps_epochs > 0,
-            gps_fix_fraction: if gps_reports > 0 {
-                gps_fixes as f64 / gps_reports as f64
-            } else {
-                0.0
-            },
-            flagged_gps_epoch_fraction: if st.gps_epochs > 0 {
-                flagged_epochs as f64 / st.gps_epochs as f64
-            } else {
-                0.0
-            },
+            gps_fix_fraction: if gps_reports > 0 { gps_fixes as f64 / gps_reports as f64 } else { 0.0 },
+            flagged_gps_epoch_fraction: if st.gps_epochs > 0 { flagged_epochs as f64 / st.gps_epochs as f64 } else { 0.0 },
             faults,
             data_gaps: gaps,
             missing,
@@ -308,12 +264,7 @@ impl<L: Borrow<LogData>> AuditRun<L> {
     pub fn new(log: L, cfg: &Config) -> Result<Self, String> {
         let n = log.borrow().samples.len();
         let tally = Tally::new(cfg, log.borrow().warnings.clone())?;
-        Ok(AuditRun {
-            log,
-            next: 0,
-            cols: Columns::with_capacity(n),
-            tally,
-        })
+        Ok(AuditRun { log, next: 0, cols: Columns::with_capacity(n), tally })
     }
 
     /// Fraction of rows processed, in [0, 1].
@@ -346,9 +297,7 @@ impl<L: Borrow<LogData>> AuditRun<L> {
     pub fn finish(mut self) -> (Report, Columns) {
         self.step(usize::MAX);
         let log = self.log.borrow();
-        let report = self
-            .tally
-            .report(log.format, log.missing.clone(), log.meta.clone());
+        let report = self.tally.report(log.format, log.missing.clone(), log.meta.clone());
         (report, self.cols)
     }
 }
@@ -376,14 +325,7 @@ pub struct StreamAudit {
 impl StreamAudit {
     /// `keep_outputs`: collect each chunk's per-row outputs.
     pub fn new(cfg: &Config, keep_outputs: bool) -> Result<Self, String> {
-        Ok(StreamAudit {
-            reader: CsvReader::new(),
-            tally: Tally::new(cfg, vec![])?,
-            rows: Vec::new(),
-            out: Columns::default(),
-            keep_outputs,
-            bytes: 0,
-        })
+        Ok(StreamAudit { reader: CsvReader::new(), tally: Tally::new(cfg, vec![])?, rows: Vec::new(), out: Columns::default(), keep_outputs, bytes: 0 })
     }
 
     /// Feed the next chunk of the file (any size, any split). Returns the
@@ -442,14 +384,7 @@ impl StreamAudit {
         r.map_err(|e| self.not_csv(e))?;
         self.drain();
         let missing = self.tally.missing();
-        let meta = self
-            .reader
-            .comments
-            .iter()
-            .take(8)
-            .enumerate()
-            .map(|(i, c)| (format!("comment{i}"), c.clone()))
-            .collect();
+        let meta = self.reader.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
         let mut warnings = core::mem::take(&mut self.reader.warnings);
         warnings.append(&mut self.tally.warnings);
         self.tally.warnings = warnings;
@@ -457,12 +392,7 @@ impl StreamAudit {
     }
 }
 
-fn track(
-    open: &mut Option<FaultInterval>,
-    done: &mut Vec<FaultInterval>,
-    o: &Output,
-    det: &Detector,
-) {
+fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Output, det: &Detector) {
     if o.status == 0 {
         if let Some(iv) = open.take() {
             if done.len() < MAX_LISTED {
@@ -471,27 +401,11 @@ fn track(
         }
         return;
     }
-    let kind_name = if o.kind == kind::OUTAGE {
-        "gps_outage"
-    } else {
-        "residual"
-    };
+    let kind_name = if o.kind == kind::OUTAGE { "gps_outage" } else { "residual" };
     let ind = det.indicators();
-    let driver = if o.kind == kind::OUTAGE {
-        "none"
-    } else {
-        ind.r_driver()
-            .and_then(|g| DRIVER_NAMES.get(g).copied())
-            .unwrap_or("none")
-    };
+    let driver = if o.kind == kind::OUTAGE { "none" } else { ind.r_driver().and_then(|g| DRIVER_NAMES.get(g).copied()).unwrap_or("none") };
     // R is ≈1 when clean and C ≈ 0.2: compare relative excess.
-    let indicator = if o.kind == kind::OUTAGE {
-        "none"
-    } else if (o.c - 0.2) / 0.8 > (o.r - 1.0) / 4.0 {
-        "C"
-    } else {
-        "R"
-    };
+    let indicator = if o.kind == kind::OUTAGE { "none" } else if (o.c - 0.2) / 0.8 > (o.r - 1.0) / 4.0 { "C" } else { "R" };
     match open {
         Some(iv) if iv.kind == kind_name => {
             iv.end = o.t;
@@ -508,15 +422,7 @@ fn track(
                     done.push(iv);
                 }
             }
-            *open = Some(FaultInterval {
-                start: o.t,
-                end: o.t,
-                kind: kind_name,
-                peak_f: o.f,
-                driver,
-                indicator,
-                rows: 1,
-            });
+            *open = Some(FaultInterval { start: o.t, end: o.t, kind: kind_name, peak_f: o.f, driver, indicator, rows: 1 });
         }
     }
 }

@@ -48,46 +48,18 @@ pub fn battery(seeds: &[u64]) -> Vec<Case> {
     let mut out = vec![];
     for &seed in seeds {
         for (kind, mags, unit) in KINDS {
-            let mags: &[f64] = if mags[0] == mags[1] {
-                &mags[..1]
-            } else {
-                &mags[..]
-            };
+            let mags: &[f64] = if mags[0] == mags[1] { &mags[..1] } else { &mags[..] };
             for &m in mags {
                 // Ramps need time to grow; the rest get 30 s.
                 let len = if kind == FaultKind::Ramp { 60.0 } else { 30.0 };
-                let label = if unit.is_empty() {
-                    kind.name().to_string()
-                } else {
-                    format!("{} {m} {unit}", kind.name())
-                };
-                out.push(Case {
-                    group: kind.name().into(),
-                    label,
-                    scenario: Scenario::with_fault(kind, m, 120.0, len, seed),
-                });
+                let label = if unit.is_empty() { kind.name().to_string() } else { format!("{} {m} {unit}", kind.name()) };
+                out.push(Case { group: kind.name().into(), label, scenario: Scenario::with_fault(kind, m, 120.0, len, seed) });
             }
         }
-        out.push(Case {
-            group: "outage".into(),
-            label: "paper (degraded fix)".into(),
-            scenario: Scenario::paper(OutageMode::Degraded, seed),
-        });
-        out.push(Case {
-            group: "outage".into(),
-            label: "paper (silent)".into(),
-            scenario: Scenario::paper(OutageMode::Silent, seed),
-        });
-        out.push(Case {
-            group: "clean".into(),
-            label: "clean aggressive".into(),
-            scenario: Scenario::clean(Trajectory::Aggressive, seed, 300.0),
-        });
-        out.push(Case {
-            group: "clean".into(),
-            label: "clean survey".into(),
-            scenario: Scenario::clean(Trajectory::Survey, seed, 300.0),
-        });
+        out.push(Case { group: "outage".into(), label: "paper (degraded fix)".into(), scenario: Scenario::paper(OutageMode::Degraded, seed) });
+        out.push(Case { group: "outage".into(), label: "paper (silent)".into(), scenario: Scenario::paper(OutageMode::Silent, seed) });
+        out.push(Case { group: "clean".into(), label: "clean aggressive".into(), scenario: Scenario::clean(Trajectory::Aggressive, seed, 300.0) });
+        out.push(Case { group: "clean".into(), label: "clean survey".into(), scenario: Scenario::clean(Trajectory::Survey, seed, 300.0) });
     }
     out
 }
@@ -172,19 +144,11 @@ fn no_clock() -> f64 {
 
 impl CompareRun {
     /// `methods` empty = all. `clock` returns seconds (e.g. `performance.now()/1e3`), or None.
-    pub fn new(
-        seeds: &[u64],
-        methods: &[Method],
-        clock: Option<fn() -> f64>,
-    ) -> Result<Self, String> {
+    pub fn new(seeds: &[u64], methods: &[Method], clock: Option<fn() -> f64>) -> Result<Self, String> {
         if seeds.is_empty() {
             return Err("compare: seeds must not be empty".into());
         }
-        let methods = if methods.is_empty() {
-            Method::ALL.to_vec()
-        } else {
-            methods.to_vec()
-        };
+        let methods = if methods.is_empty() { Method::ALL.to_vec() } else { methods.to_vec() };
         let cases = battery(seeds);
         Ok(CompareRun {
             acc: methods.iter().map(|_| Acc::default()).collect(),
@@ -210,11 +174,7 @@ impl CompareRun {
     /// Fraction done, in [0, 1].
     pub fn progress(&self) -> f64 {
         let n = self.units();
-        if n == 0 {
-            1.0
-        } else {
-            self.next as f64 / n as f64
-        }
+        if n == 0 { 1.0 } else { self.next as f64 / n as f64 }
     }
 
     pub fn done(&self) -> bool {
@@ -229,10 +189,7 @@ impl CompareRun {
         let nm = self.methods.len();
         let (item, mi) = (self.next / nm, self.next % nm);
         let method = self.methods[mi];
-        let cfg = Config {
-            method,
-            ..Config::default()
-        };
+        let cfg = Config { method, ..Config::default() };
         if item < self.cases.len() {
             if self.current.as_ref().is_none_or(|(i, _)| *i != item) {
                 let rows = sim::simulate(&self.cases[item].scenario)?;
@@ -300,11 +257,7 @@ impl CompareRun {
             self.acc[mi].logs.push(LogResult {
                 name: name.clone(),
                 gps_epochs: epochs,
-                flagged_fraction: if epochs > 0 {
-                    flagged as f64 / epochs as f64
-                } else {
-                    0.0
-                },
+                flagged_fraction: if epochs > 0 { flagged as f64 / epochs as f64 } else { 0.0 },
             });
         }
         self.next += 1;
@@ -331,36 +284,19 @@ impl CompareRun {
                     metrics: acc.metrics(),
                     clean_hours: hours,
                     clean_alarms: a.clean_alarms,
-                    false_alarms_per_hour: if hours > 0.0 {
-                        a.clean_alarms as f64 / hours
-                    } else {
-                        f64::NAN
-                    },
-                    clean_flagged_fraction: if a.clean_epochs > 0 {
-                        a.clean_flagged as f64 / a.clean_epochs as f64
-                    } else {
-                        0.0
-                    },
+                    false_alarms_per_hour: if hours > 0.0 { a.clean_alarms as f64 / hours } else { f64::NAN },
+                    clean_flagged_fraction: if a.clean_epochs > 0 { a.clean_flagged as f64 / a.clean_epochs as f64 } else { 0.0 },
                     kinds: a
                         .kinds
                         .into_iter()
-                        .map(|(group, faults, detected, mut delays)| KindResult {
-                            group,
-                            faults,
-                            detected,
-                            median_delay_s: median(&mut delays),
-                        })
+                        .map(|(group, faults, detected, mut delays)| KindResult { group, faults, detected, median_delay_s: median(&mut delays) })
                         .collect(),
                     logs: a.logs,
                     rows_per_s: a.rows_done as f64 / a.seconds,
                 }
             })
             .collect();
-        Ok(Comparison {
-            seeds: self.seeds,
-            flights: self.cases.len(),
-            methods,
-        })
+        Ok(Comparison { seeds: self.seeds, flights: self.cases.len(), methods })
     }
 }
 
@@ -370,28 +306,17 @@ fn median(v: &mut [f64]) -> f64 {
     }
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 /// Statuses of one method over a stream (bad rows count as status 0).
 fn run(cfg: Config, rows: &[Sample]) -> Result<Vec<u8>, String> {
     let mut det = Detector::new(cfg)?;
-    Ok(rows
-        .iter()
-        .map(|s| det.push(s).map_or(0, |o| o.status))
-        .collect())
+    Ok(rows.iter().map(|s| det.push(s).map_or(0, |o| o.status)).collect())
 }
 
 fn f(x: f64, d: usize) -> String {
-    if x.is_finite() {
-        format!("{x:.d$}")
-    } else {
-        "–".into()
-    }
+    if x.is_finite() { format!("{x:.d$}") } else { "–".into() }
 }
 
 /// A table header with one column per method.
@@ -417,17 +342,9 @@ pub fn markdown(c: &Comparison) -> String {
         c.seeds
     ));
     s.push_str("| method | accuracy | false alarm | misdetection | F2 | false alarms / h (clean) | clean epochs flagged |\n|---|---|---|---|---|---|---|\n");
-    let best = c
-        .methods
-        .iter()
-        .map(|m| m.metrics.f2)
-        .fold(f64::NEG_INFINITY, f64::max);
+    let best = c.methods.iter().map(|m| m.metrics.f2).fold(f64::NEG_INFINITY, f64::max);
     for m in &c.methods {
-        let name = if m.metrics.f2 == best {
-            format!("**{}**", m.method)
-        } else {
-            m.method.to_string()
-        };
+        let name = if m.metrics.f2 == best { format!("**{}**", m.method) } else { m.method.to_string() };
         s.push_str(&format!(
             "| {name} | {} | {} | {} | {} | {} | {}% |\n",
             f(m.metrics.accuracy, 4),
@@ -445,12 +362,7 @@ pub fn markdown(c: &Comparison) -> String {
             s.push_str(&format!("| {} |", kr.group));
             for m in &c.methods {
                 match m.kinds.get(k) {
-                    Some(r) => s.push_str(&format!(
-                        " {}/{} · {} |",
-                        r.detected,
-                        r.faults,
-                        f(r.median_delay_s, 1)
-                    )),
+                    Some(r) => s.push_str(&format!(" {}/{} · {} |", r.detected, r.faults, f(r.median_delay_s, 1))),
                     None => s.push_str(" – |"),
                 }
             }
@@ -483,17 +395,7 @@ mod tests {
         let b = battery(&[1, 2]);
         // 7 kinds: 4 with two magnitudes, 3 without → 11, + 2 outage + 2 clean = 15 per seed.
         assert_eq!(b.len(), 30);
-        for g in [
-            "step",
-            "ramp",
-            "noise",
-            "frozen",
-            "zero-velocity",
-            "baro-stuck",
-            "accel-bias",
-            "outage",
-            "clean",
-        ] {
+        for g in ["step", "ramp", "noise", "frozen", "zero-velocity", "baro-stuck", "accel-bias", "outage", "clean"] {
             assert!(b.iter().any(|c| c.group == g), "{g}");
         }
     }

@@ -106,43 +106,23 @@ fn num(field: &str, v: Option<f64>, lo: f64, hi: f64, default: f64) -> Result<f6
     match v {
         None => Ok(default),
         Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(x),
-        Some(x) => Err(format!(
-            "config.{field}: must be a number in [{lo}, {hi}], got {x}"
-        )),
+        Some(x) => Err(format!("config.{field}: must be a number in [{lo}, {hi}], got {x}")),
     }
 }
 
 fn int(field: &str, v: Option<f64>, lo: usize, hi: usize, default: usize) -> Result<usize, String> {
     match v {
         None => Ok(default),
-        Some(x) if x.is_finite() && x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => {
-            Ok(x as usize)
-        }
-        Some(x) => Err(format!(
-            "config.{field}: must be an integer in {lo}..={hi}, got {x}"
-        )),
+        Some(x) if x.is_finite() && x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => Ok(x as usize),
+        Some(x) => Err(format!("config.{field}: must be an integer in {lo}..={hi}, got {x}")),
     }
 }
 
 impl ConfigInput {
     /// Field names as users spell them (camelCase).
     pub const FIELDS: [&'static str; 16] = [
-        "method",
-        "tc",
-        "q",
-        "window",
-        "threshold",
-        "retrain",
-        "gpsPosSigma",
-        "gpsAltSigma",
-        "gpsVelSigma",
-        "baroSigma",
-        "accelNoise",
-        "cvAccelNoise",
-        "outageTimeout",
-        "maxCoast",
-        "dataGap",
-        "model",
+        "method", "tc", "q", "window", "threshold", "retrain", "gpsPosSigma", "gpsAltSigma", "gpsVelSigma",
+        "baroSigma", "accelNoise", "cvAccelNoise", "outageTimeout", "maxCoast", "dataGap", "model",
     ];
 
     /// Reject a field name that is not a config field (for front ends that
@@ -151,10 +131,7 @@ impl ConfigInput {
         if Self::FIELDS.contains(&name) {
             Ok(())
         } else {
-            Err(format!(
-                "config.{name}: unknown field (known: {})",
-                Self::FIELDS.join(", ")
-            ))
+            Err(format!("config.{name}: unknown field (known: {})", Self::FIELDS.join(", ")))
         }
     }
 
@@ -181,36 +158,12 @@ impl ConfigInput {
             threshold: num("threshold", self.threshold, -10.0, 10.0, d.threshold)?,
             retrain: self.retrain.unwrap_or(d.retrain),
             noise: FilterNoiseCfg {
-                gps_pos_sigma: num(
-                    "gpsPosSigma",
-                    self.gps_pos_sigma,
-                    1e-3,
-                    1000.0,
-                    n.gps_pos_sigma,
-                )?,
-                gps_alt_sigma: num(
-                    "gpsAltSigma",
-                    self.gps_alt_sigma,
-                    1e-3,
-                    1000.0,
-                    n.gps_alt_sigma,
-                )?,
-                gps_vel_sigma: num(
-                    "gpsVelSigma",
-                    self.gps_vel_sigma,
-                    1e-4,
-                    100.0,
-                    n.gps_vel_sigma,
-                )?,
+                gps_pos_sigma: num("gpsPosSigma", self.gps_pos_sigma, 1e-3, 1000.0, n.gps_pos_sigma)?,
+                gps_alt_sigma: num("gpsAltSigma", self.gps_alt_sigma, 1e-3, 1000.0, n.gps_alt_sigma)?,
+                gps_vel_sigma: num("gpsVelSigma", self.gps_vel_sigma, 1e-4, 100.0, n.gps_vel_sigma)?,
                 baro_sigma: num("baroSigma", self.baro_sigma, 1e-3, 1000.0, n.baro_sigma)?,
                 accel_noise: num("accelNoise", self.accel_noise, 1e-4, 100.0, n.accel_noise)?,
-                cv_accel_noise: num(
-                    "cvAccelNoise",
-                    self.cv_accel_noise,
-                    1e-3,
-                    1000.0,
-                    n.cv_accel_noise,
-                )?,
+                cv_accel_noise: num("cvAccelNoise", self.cv_accel_noise, 1e-3, 1000.0, n.cv_accel_noise)?,
             },
             outage_timeout,
             max_coast: num("maxCoast", self.max_coast, 0.1, 3600.0, d.max_coast)?,
@@ -224,8 +177,7 @@ impl ConfigInput {
         if text.trim().is_empty() {
             return Ok(Config::default());
         }
-        let v: serde_json::Value =
-            serde_json::from_str(text).map_err(|e| format!("config: not JSON: {e}"))?;
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| format!("config: not JSON: {e}"))?;
         let serde_json::Value::Object(map) = v else {
             return Err("config: must be a JSON object".into());
         };
@@ -235,8 +187,7 @@ impl ConfigInput {
             let one = serde_json::Value::Object([(k.clone(), val.clone())].into_iter().collect());
             serde_json::from_value::<ConfigInput>(one).map_err(|e| format!("config.{k}: {e}"))?;
         }
-        let input: ConfigInput = serde_json::from_value(serde_json::Value::Object(map))
-            .map_err(|e| format!("config: {e}"))?;
+        let input: ConfigInput = serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| format!("config: {e}"))?;
         input.check()
     }
 }
@@ -280,10 +231,7 @@ impl Config {
     }
 
     pub fn indicator_settings(&self) -> IndicatorSettings {
-        IndicatorSettings {
-            window: self.window,
-            ..IndicatorSettings::default()
-        }
+        IndicatorSettings { window: self.window, ..IndicatorSettings::default() }
     }
 }
 
@@ -312,25 +260,13 @@ mod tests {
         assert!(e.contains("config.tc") && e.contains("got 0"), "{e}");
         let e = ConfigInput::from_json(r#"{"window": 2.5}"#).unwrap_err();
         assert!(e.contains("config.window") && e.contains("2.5"), "{e}");
-        assert!(ConfigInput::check_field_name("bogus")
-            .unwrap_err()
-            .contains("config.bogus"));
-        assert!(ConfigInput::FIELDS
-            .iter()
-            .all(|f| ConfigInput::check_field_name(f).is_ok()));
+        assert!(ConfigInput::check_field_name("bogus").unwrap_err().contains("config.bogus"));
+        assert!(ConfigInput::FIELDS.iter().all(|f| ConfigInput::check_field_name(f).is_ok()));
         // Every declared field round-trips through serde (FIELDS matches the struct).
         for f in ConfigInput::FIELDS {
-            let v = match f {
-                "method" => "\"anfis\"",
-                "retrain" => "true",
-                "model" => "null",
-                _ => "1",
-            };
+            let v = match f { "method" => "\"anfis\"", "retrain" => "true", "model" => "null", _ => "1" };
             let r = ConfigInput::from_json(&format!("{{\"{f}\": {v}}}"));
-            assert!(
-                !r.as_ref().is_err_and(|e| e.contains("unknown field")),
-                "{f}: {r:?}"
-            );
+            assert!(!r.as_ref().is_err_and(|e| e.contains("unknown field")), "{f}: {r:?}");
         }
         let e = ConfigInput::from_json(r#"{"bogus": 1}"#).unwrap_err();
         assert!(e.contains("bogus"), "{e}");

@@ -67,8 +67,7 @@ impl Model {
         static EMBEDDED: std::sync::OnceLock<Result<Model, String>> = std::sync::OnceLock::new();
         EMBEDDED
             .get_or_init(|| {
-                serde_json::from_str(include_str!("default_model.json"))
-                    .map_err(|e| format!("embedded model: {e}"))
+                serde_json::from_str(include_str!("default_model.json")).map_err(|e| format!("embedded model: {e}"))
             })
             .clone()
     }
@@ -90,9 +89,7 @@ impl Model {
             let mut det = Detector::with_model(cfg.clone(), &base);
             det.set_oracle(true);
             for (i, s) in rows.iter().enumerate() {
-                let o = det
-                    .push(s)
-                    .map_err(|e| format!("training stream, {e} (index {i})"))?;
+                let o = det.push(s).map_err(|e| format!("training stream, {e} (index {i})"))?;
                 if !o.gps_epoch || s.label.is_nan() || o.kind == kind::NO_GPS {
                     continue;
                 }
@@ -127,11 +124,7 @@ impl Model {
         let d2 = pick(&mut fault, cfg.q, &mut rng);
         let mut xs = d1.clone();
         xs.extend_from_slice(&d2);
-        let ys: Vec<f64> = d1
-            .iter()
-            .map(|_| 0.0)
-            .chain(d2.iter().map(|_| 1.0))
-            .collect();
+        let ys: Vec<f64> = d1.iter().map(|_| 0.0).chain(d2.iter().map(|_| 1.0)).collect();
         let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
         for x in &xs {
             for k in 0..2 {
@@ -171,13 +164,7 @@ impl Model {
 
     pub fn check(&self) -> Result<(), String> {
         crate::config::check_anfis(&self.anfis)?;
-        if !self
-            .d1
-            .iter()
-            .chain(self.d2.iter())
-            .flatten()
-            .all(|v| v.is_finite())
-        {
+        if !self.d1.iter().chain(self.d2.iter()).flatten().all(|v| v.is_finite()) {
             return Err("database entries must be finite".into());
         }
         Ok(())
@@ -233,11 +220,7 @@ pub struct InputError {
 
 impl core::fmt::Display for InputError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(
-            f,
-            "row {}: field '{}': {}",
-            self.row, self.field, self.reason
-        )
+        write!(f, "row {}: field '{}': {}", self.row, self.field, self.reason)
     }
 }
 
@@ -264,11 +247,7 @@ struct Ring {
 
 impl Ring {
     fn new(cap: usize, init: &[[f64; 2]]) -> Self {
-        let mut r = Ring {
-            buf: vec![[0.0; 2]; cap.max(1)],
-            head: 0,
-            len: 0,
-        };
+        let mut r = Ring { buf: vec![[0.0; 2]; cap.max(1)], head: 0, len: 0 };
         let skip = init.len().saturating_sub(cap);
         for x in init.iter().skip(skip) {
             r.push(*x);
@@ -419,9 +398,7 @@ impl Detector {
             None => Model::embedded()?,
         };
         let pool = match cfg.method {
-            Method::Rms | Method::Knee | Method::Adaptive => {
-                Some(methods::default_pool(cfg.method)?)
-            }
+            Method::Rms | Method::Knee | Method::Adaptive => Some(methods::default_pool(cfg.method)?),
             _ => None,
         };
         let mut det = Self::with_model(cfg, &model);
@@ -463,23 +440,14 @@ impl Detector {
             imu_episode: false,
             imu_calm: 0,
             baro_calm: 0,
-            last: Output {
-                kind: kind::NO_GPS,
-                driver: 255,
-                ..Output::default()
-            },
+            last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
             last_ind: Indicators::default(),
             stats: Stats::default(),
             oracle: false,
             train_x: Vec::with_capacity(2 * q),
             train_y: Vec::with_capacity(2 * q),
             d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
-            d0_y: model
-                .d1
-                .iter()
-                .map(|_| 0.0)
-                .chain(model.d2.iter().map(|_| 1.0))
-                .collect(),
+            d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
             prev_nu: None,
             maha: Default::default(),
             baro_inn: None,
@@ -502,20 +470,13 @@ impl Detector {
         self.d2.check_shape(q, "D2")?;
         self.ind.check_shape(&self.cfg.indicator_settings())?;
         if self.d0_x.len() != self.d0_y.len() {
-            return Err(format!(
-                "D0: {} samples but {} labels",
-                self.d0_x.len(),
-                self.d0_y.len()
-            ));
+            return Err(format!("D0: {} samples but {} labels", self.d0_x.len(), self.d0_y.len()));
         }
         crate::config::check_anfis(&self.anfis).map_err(|e| format!("anfis: {e}"))?;
         for w in &self.maha {
             w.check_shape()?;
         }
-        let pooled = matches!(
-            self.cfg.method,
-            Method::Rms | Method::Knee | Method::Adaptive
-        );
+        let pooled = matches!(self.cfg.method, Method::Rms | Method::Knee | Method::Adaptive);
         match &self.pool {
             Some(p) if pooled => p.eval.check_shape()?,
             None if !pooled => {}
@@ -616,11 +577,7 @@ impl Detector {
             // Every sensor stopped: a logging gap, not a navigation fault.
             self.stats.data_gaps += 1;
             // No verdict carries across a gap: it starts from "no GPS yet".
-            self.last = Output {
-                kind: kind::NO_GPS,
-                driver: 255,
-                ..Output::default()
-            };
+            self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
             self.kf = None;
             self.imu = None;
             self.ind.reset_references();
@@ -635,10 +592,7 @@ impl Detector {
 
         // Predict to this row's time with the IMU held from the previous row.
         if dt > 0.0 {
-            let imu = self
-                .imu
-                .filter(|(ti, _)| t - ti <= IMU_TIMEOUT)
-                .map(|(_, u)| u);
+            let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
             if let Some(kf) = self.kf.as_mut() {
                 let v0 = kf.velocity();
                 match kf.predict(dt, imu.as_ref()) {
@@ -660,13 +614,7 @@ impl Detector {
         }
         if s.has_accel() && s.has_attitude() {
             if let Some(q) = quat_from_wxyz(s.qw, s.qx, s.qy, s.qz) {
-                self.imu = Some((
-                    t,
-                    ImuInput {
-                        f_body: Vector3::new(s.ax, s.ay, s.az),
-                        q,
-                    },
-                ));
+                self.imu = Some((t, ImuInput { f_body: Vector3::new(s.ax, s.ay, s.az), q }));
                 self.stats.imu_rows += 1;
             }
         }
@@ -755,29 +703,20 @@ impl Detector {
         let inn = kf.baro_innovation(baro);
         self.resid[6] = inn.nu[0];
         let g = |(nu, s): (f64, f64)| nu.abs() / s.max(1e-12).sqrt();
-        if self
-            .baro_inn
-            .is_none_or(|b| g((inn.nu[0], inn.s[0])) > g(b))
-        {
+        if self.baro_inn.is_none_or(|b| g((inn.nu[0], inn.s[0])) > g(b)) {
             self.baro_inn = Some((inn.nu[0], inn.s[0]));
         }
         let h_prior = -kf.x[2] + kf.x[9];
         let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
         let prev = self.ind.previous(6);
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
-        let cons = self
-            .ind
-            .observe_baro(t, baro - self.alt_int, self.group_bad[2]);
+        let cons = self.ind.observe_baro(t, baro - self.alt_int, self.group_bad[2]);
         if self.group_bad[2] {
             // Withheld baro that follows the filter's climb again (its change
             // since before the fault is consistent): the fault is over, but
             // the offset state absorbed part of it before detection, so
             // re-anchor the offset instead of judging the baro against it.
-            self.baro_calm = if cons < BARO_RECOVER {
-                self.baro_calm + 1
-            } else {
-                0
-            };
+            self.baro_calm = if cons < BARO_RECOVER { self.baro_calm + 1 } else { 0 };
             if self.baro_calm >= RECOVER_EPOCHS {
                 self.baro_calm = 0;
                 self.group_bad[2] = false;
@@ -841,16 +780,7 @@ impl Detector {
             self.imu_gap = true;
             self.coast_start = None;
             self.prev_nu = None;
-            return Output {
-                t,
-                status: 0,
-                f: 0.0,
-                r: 0.0,
-                c: 0.0,
-                kind: kind::NORMAL,
-                gps_epoch: true,
-                driver: 255,
-            };
+            return Output { t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
         };
 
         // Residuals and predicted changes since the last epoch.
@@ -860,8 +790,7 @@ impl Detector {
         let mut prev_r = [0.0; 6];
         for a in 0..3 {
             prev_r[a] = self.ind.previous(a);
-            self.ind
-                .observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
+            self.ind.observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
         }
         let vel_prior = kf.velocity();
         let mut vin_opt = None;
@@ -871,12 +800,7 @@ impl Detector {
             self.resid[3..6].copy_from_slice(&vin.nu);
             for a in 0..3 {
                 prev_r[3 + a] = self.ind.previous(3 + a);
-                self.ind.observe(
-                    3 + a,
-                    vin.nu[a],
-                    vel_prior[a] - self.prev_vel[a],
-                    kf.P[(3 + a, 3 + a)],
-                );
+                self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.P[(3 + a, 3 + a)]);
             }
         }
         // Position–velocity consistency: the GPS's own position change
@@ -901,14 +825,10 @@ impl Detector {
             self.imu_gap = false;
         }
         match &vel {
-            Some(v) => self
-                .ind
-                .observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
+            Some(v) => self.ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
             None => self.ind.clear_imu(),
         }
-        self.ind.set_imu_fold(
-            self.flight_time >= IMU_ARM_S && self.ind.imu_learnt() >= IMU_ARM_WINDOWS,
-        );
+        self.ind.set_imu_fold(self.flight_time >= IMU_ARM_S && self.ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let ind = self.ind.close_epoch();
         self.last_ind = ind;
         let x = inputs(ind.r, ind.c);
@@ -922,12 +842,7 @@ impl Detector {
         } else {
             let mut nu = [f64::NAN; 6];
             nu[..3].copy_from_slice(&pin.nu);
-            let mut inn = EpochInnovations {
-                nu,
-                s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(),
-                m: 3,
-                baro: baro_inn,
-            };
+            let mut inn = EpochInnovations { nu, s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(), m: 3, baro: baro_inn };
             for a in 0..3 {
                 inn.s[(a, a)] = pin.s[a];
             }
@@ -939,10 +854,7 @@ impl Detector {
                 }
             }
             dr = core::array::from_fn(|g| {
-                core::array::from_fn(|a| {
-                    self.prev_nu
-                        .map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a])
-                })
+                core::array::from_fn(|a| self.prev_nu.map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a]))
             });
             self.prev_nu = Some(inn.nu);
             match self.cfg.method {
@@ -959,11 +871,7 @@ impl Detector {
             }
         };
         let f = dec.map_or(f_anfis, |d| d.score);
-        let th = if dec.is_some() {
-            1.0
-        } else {
-            self.cfg.threshold
-        };
+        let th = if dec.is_some() { 1.0 } else { self.cfg.threshold };
         let mut fault = if self.oracle { s.label >= 0.5 } else { f >= th };
         if fault {
             if !self.in_episode {
@@ -1058,11 +966,7 @@ impl Detector {
             self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
             // An IMU episode ends when the IMU agrees with the GPS again, not
             // by re-anchoring on a GPS that never departed.
-            if !self.oracle
-                && !self.imu_episode
-                && self.calm_epochs >= RECOVER_EPOCHS
-                && t - start > 0.5
-            {
+            if !self.oracle && !self.imu_episode && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
                 // The GPS is self-consistent again and the offset is within
                 // what the coast could have drifted: re-anchor, verdict normal.
                 reset = true;
@@ -1109,8 +1013,7 @@ impl Detector {
                     Ok(()) => {
                         for a in 0..3 {
                             let post = v[a] - kf.x[3 + a];
-                            self.ind
-                                .accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)], post);
+                            self.ind.accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)], post);
                         }
                     }
                     Err(e) => err = Some(e),
@@ -1194,11 +1097,7 @@ impl Detector {
     /// Misclassified D0 samples at the configured threshold.
     fn d0_errors(&self, a: &Anfis) -> usize {
         let th = self.cfg.threshold;
-        self.d0_x
-            .iter()
-            .zip(&self.d0_y)
-            .filter(|(x, y)| (a.eval(x) >= th) != (**y >= 0.5))
-            .count()
+        self.d0_x.iter().zip(&self.d0_y).filter(|(x, y)| (a.eval(x) >= th) != (**y >= 0.5)).count()
     }
 }
 
@@ -1207,8 +1106,7 @@ fn range_of(i: usize) -> (f64, f64) {
     range_of_const(i)
 }
 
-const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] =
-    [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
+const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] = [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
 
 /// Lower and upper bounds per column (see `range_of`), as tables for the
 /// fast path.
@@ -1257,8 +1155,8 @@ const fn range_of_const(i: usize) -> (f64, f64) {
 #[inline]
 fn row_is_plainly_valid(s: &Sample) -> bool {
     let v = [
-        s.t, s.lat, s.lon, s.alt, s.pn, s.pe, s.pd, s.vn, s.ve, s.vd, s.fix, s.sats, s.eph, s.epv,
-        s.ax, s.ay, s.az, s.gx, s.gy, s.gz, s.qw, s.qx, s.qy, s.qz, s.baro,
+        s.t, s.lat, s.lon, s.alt, s.pn, s.pe, s.pd, s.vn, s.ve, s.vd, s.fix, s.sats, s.eph, s.epv, s.ax, s.ay, s.az,
+        s.gx, s.gy, s.gz, s.qw, s.qx, s.qy, s.qz, s.baro,
     ];
     let mut ok = !v[0].is_nan();
     for i in 0..25 {
@@ -1276,9 +1174,7 @@ fn row_is_plainly_valid(s: &Sample) -> bool {
 /// Check one row: `t` present and finite, no infinities, every value in its
 /// range, sensor groups complete (all three axes or none).
 pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
-    if row_is_plainly_valid(s)
-        && (s.qw.is_nan() || quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_some())
-    {
+    if row_is_plainly_valid(s) && (s.qw.is_nan() || quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_some()) {
         return Ok(());
     }
     validate_detailed(s, row)
@@ -1288,11 +1184,7 @@ pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
 fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
     use crate::sample::COLUMNS;
     if !s.t.is_finite() {
-        return Err(InputError {
-            row,
-            field: "t",
-            reason: format!("required and must be finite, got {}", s.t),
-        });
+        return Err(InputError { row, field: "t", reason: format!("required and must be finite, got {}", s.t) });
     }
     for (i, name) in COLUMNS.iter().enumerate() {
         let v = s.get(i);
@@ -1301,30 +1193,14 @@ fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
         }
         let (lo, hi) = range_of(i);
         if !v.is_finite() || v < lo || v > hi {
-            return Err(InputError {
-                row,
-                field: name,
-                reason: format!("value {v} outside [{lo}, {hi}]"),
-            });
+            return Err(InputError { row, field: name, reason: format!("value {v} outside [{lo}, {hi}]") });
         }
     }
-    for g in GROUPS_ALL_OR_NONE
-        .iter()
-        .map(|g| g.as_slice())
-        .chain(core::iter::once([20usize, 21, 22, 23].as_slice()))
-    {
+    for g in GROUPS_ALL_OR_NONE.iter().map(|g| g.as_slice()).chain(core::iter::once([20usize, 21, 22, 23].as_slice())) {
         let present = g.iter().filter(|&&i| !s.get(i).is_nan()).count();
         if present != 0 && present != g.len() {
-            let missing = g
-                .iter()
-                .find(|&&i| s.get(i).is_nan())
-                .copied()
-                .unwrap_or(g[0]);
-            let have = g
-                .iter()
-                .find(|&&i| !s.get(i).is_nan())
-                .copied()
-                .unwrap_or(g[0]);
+            let missing = g.iter().find(|&&i| s.get(i).is_nan()).copied().unwrap_or(g[0]);
+            let have = g.iter().find(|&&i| !s.get(i).is_nan()).copied().unwrap_or(g[0]);
             return Err(InputError {
                 row,
                 field: COLUMNS[missing],
@@ -1333,11 +1209,7 @@ fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
         }
     }
     if s.has_attitude() && quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_none() {
-        return Err(InputError {
-            row,
-            field: "qw",
-            reason: "quaternion norm must be near 1".into(),
-        });
+        return Err(InputError { row, field: "qw", reason: "quaternion norm must be near 1".into() });
     }
     Ok(())
 }
@@ -1351,15 +1223,7 @@ mod tests {
     /// the infinities, NaN.
     fn edge(i: usize, k: usize) -> f64 {
         let (lo, hi) = range_of(i);
-        [
-            lo,
-            hi,
-            lo - 1.0,
-            hi + 1.0,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NAN,
-        ][k % 7]
+        [lo, hi, lo - 1.0, hi + 1.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN][k % 7]
     }
 
     proptest! {

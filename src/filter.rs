@@ -74,10 +74,7 @@ impl core::fmt::Display for FilterError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
             FilterError::CovarianceUnhealthy(i) => {
-                write!(
-                    f,
-                    "Kalman covariance unhealthy at state {i} (non-finite or negative variance)"
-                )
+                write!(f, "Kalman covariance unhealthy at state {i} (non-finite or negative variance)")
             }
             FilterError::NonFinite(what) => {
                 write!(f, "non-finite {what} reached the Kalman filter")
@@ -105,10 +102,7 @@ pub struct Innovation<const M: usize> {
 
 impl<const M: usize> Default for Innovation<M> {
     fn default() -> Self {
-        Innovation {
-            nu: [0.0; M],
-            s: [0.0; M],
-        }
+        Innovation { nu: [0.0; M], s: [0.0; M] }
     }
 }
 
@@ -163,13 +157,7 @@ pub struct Kf {
 impl Kf {
     /// Start at position `p` (NED, m) and velocity `v` (m/s) with the given
     /// 1-sigma uncertainties.
-    pub fn new(
-        noise: FilterNoise,
-        p: Vector3<f64>,
-        v: Vector3<f64>,
-        p_sigma: f64,
-        v_sigma: f64,
-    ) -> Self {
+    pub fn new(noise: FilterNoise, p: Vector3<f64>, v: Vector3<f64>, p_sigma: f64, v_sigma: f64) -> Self {
         let mut x = StateVec::zeros();
         x.fixed_rows_mut::<3>(IP).copy_from(&p);
         x.fixed_rows_mut::<3>(IV).copy_from(&v);
@@ -180,14 +168,7 @@ impl Kf {
             P[(IB + i, IB + i)] = 0.05 * 0.05;
         }
         P[(IBARO, IBARO)] = 100.0;
-        Kf {
-            x,
-            P,
-            noise,
-            baro_initialised: false,
-            pending: Pending::default(),
-            hold_bias: false,
-        }
+        Kf { x, P, noise, baro_initialised: false, pending: Pending::default(), hold_bias: false }
     }
 
     /// Hold (or release) the accelerometer-bias estimate (see `hold_bias`).
@@ -335,11 +316,7 @@ impl Kf {
     /// Predicted GPS position innovation without updating.
     pub fn position_innovation(&mut self, y: &Vector3<f64>) -> Innovation<3> {
         self.flush_or_poison();
-        let r = [
-            self.noise.gps_pos_h,
-            self.noise.gps_pos_h,
-            self.noise.gps_pos_v,
-        ];
+        let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v];
         let mut out = Innovation::<3>::default();
         for i in 0..3 {
             out.nu[i] = y[i] - self.x[IP + i];
@@ -366,20 +343,13 @@ impl Kf {
         let r = self.noise.baro;
         Innovation {
             nu: [baro - (-self.x[IP + 2] + self.x[IBARO])],
-            s: [
-                self.P[(IP + 2, IP + 2)] + self.P[(IBARO, IBARO)] - 2.0 * self.P[(IP + 2, IBARO)]
-                    + r * r,
-            ],
+            s: [self.P[(IP + 2, IP + 2)] + self.P[(IBARO, IBARO)] - 2.0 * self.P[(IP + 2, IBARO)] + r * r],
         }
     }
 
     /// GPS position update (m, NED).
     pub fn update_position(&mut self, y: &Vector3<f64>) -> Result<(), FilterError> {
-        let r = [
-            self.noise.gps_pos_h,
-            self.noise.gps_pos_h,
-            self.noise.gps_pos_v,
-        ];
+        let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v];
         for i in 0..3 {
             self.scalar_update(&[(IP + i, 1.0)], y[i], r[i] * r[i])?;
         }
@@ -408,11 +378,7 @@ impl Kf {
             self.baro_initialised = true;
             return Ok(());
         }
-        self.scalar_update(
-            &[(IP + 2, -1.0), (IBARO, 1.0)],
-            baro,
-            self.noise.baro * self.noise.baro,
-        )?;
+        self.scalar_update(&[(IP + 2, -1.0), (IBARO, 1.0)], baro, self.noise.baro * self.noise.baro)?;
         self.check_health()
     }
 
@@ -543,17 +509,8 @@ mod tests {
 
     #[test]
     fn hover_specific_force_cancels_gravity() {
-        let mut kf = Kf::new(
-            FilterNoise::default(),
-            Vector3::zeros(),
-            Vector3::zeros(),
-            1.0,
-            0.1,
-        );
-        let imu = ImuInput {
-            f_body: Vector3::new(0.0, 0.0, -GRAVITY),
-            q: level(),
-        };
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 1.0, 0.1);
+        let imu = ImuInput { f_body: Vector3::new(0.0, 0.0, -GRAVITY), q: level() };
         for _ in 0..100 {
             kf.predict(0.01, Some(&imu)).unwrap();
         }
@@ -565,17 +522,8 @@ mod tests {
     fn forward_acceleration_integrates() {
         // 1 m/s² forward for 2 s, body yawed 90° (nose east): east velocity 2 m/s, 2 m east.
         let q = UnitQuaternion::from_euler_angles(0.0, 0.0, core::f64::consts::FRAC_PI_2);
-        let mut kf = Kf::new(
-            FilterNoise::default(),
-            Vector3::zeros(),
-            Vector3::zeros(),
-            1.0,
-            0.1,
-        );
-        let imu = ImuInput {
-            f_body: Vector3::new(1.0, 0.0, -GRAVITY),
-            q,
-        };
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 1.0, 0.1);
+        let imu = ImuInput { f_body: Vector3::new(1.0, 0.0, -GRAVITY), q };
         for _ in 0..200 {
             kf.predict(0.01, Some(&imu)).unwrap();
         }
@@ -588,10 +536,7 @@ mod tests {
     fn scalar_update_matches_closed_form() {
         // Prior var 4, meas var 1 at offset 5: gain 0.8, posterior 4, var 0.8.
         let mut kf = Kf::new(
-            FilterNoise {
-                gps_pos_h: 1.0,
-                ..FilterNoise::default()
-            },
+            FilterNoise { gps_pos_h: 1.0, ..FilterNoise::default() },
             Vector3::zeros(),
             Vector3::zeros(),
             2.0,
@@ -608,17 +553,8 @@ mod tests {
     #[test]
     fn cv_model_covariance_growth() {
         // Constant-velocity: var(p) grows by q dt³/3 + dt² var(v).
-        let noise = FilterNoise {
-            cv_accel: 2.0,
-            ..FilterNoise::default()
-        };
-        let mut kf = Kf::new(
-            noise,
-            Vector3::zeros(),
-            Vector3::new(1.0, 0.0, 0.0),
-            1.0,
-            0.5,
-        );
+        let noise = FilterNoise { cv_accel: 2.0, ..FilterNoise::default() };
+        let mut kf = Kf::new(noise, Vector3::zeros(), Vector3::new(1.0, 0.0, 0.0), 1.0, 0.5);
         kf.predict(0.25, None).unwrap();
         kf.predict(0.75, None).unwrap();
         kf.flush().unwrap();
@@ -630,61 +566,35 @@ mod tests {
     #[test]
     fn deferred_propagation_equals_stepwise() {
         // With no bias random walk the accumulated transition is exact.
-        let noise = FilterNoise {
-            accel_bias_rw: 0.0,
-            ..FilterNoise::default()
-        };
-        let mut a = Kf::new(
-            noise,
-            Vector3::zeros(),
-            Vector3::new(3.0, 1.0, 0.0),
-            1.0,
-            0.3,
-        );
+        let noise = FilterNoise { accel_bias_rw: 0.0, ..FilterNoise::default() };
+        let mut a = Kf::new(noise, Vector3::zeros(), Vector3::new(3.0, 1.0, 0.0), 1.0, 0.3);
         let mut b = a.clone();
         for k in 0..50 {
             let q = UnitQuaternion::from_euler_angles(0.1 * (k as f64).sin(), 0.2, 0.05 * k as f64);
-            let imu = ImuInput {
-                f_body: Vector3::new(0.5, -0.2, -9.7),
-                q,
-            };
+            let imu = ImuInput { f_body: Vector3::new(0.5, -0.2, -9.7), q };
             let u = if k % 7 == 3 { None } else { Some(&imu) };
             a.predict(0.02, u).unwrap();
             b.predict(0.02, u).unwrap();
             b.flush().unwrap();
         }
         a.flush().unwrap();
-        assert!(
-            (a.P - b.P).abs().max() < 1e-12,
-            "max diff {}",
-            (a.P - b.P).abs().max()
-        );
+        assert!((a.P - b.P).abs().max() < 1e-12, "max diff {}", (a.P - b.P).abs().max());
         assert_eq!(a.x, b.x);
     }
 
     #[test]
     fn structured_flush_equals_dense_phi_p_phit() {
-        let mut kf = Kf::new(
-            FilterNoise::default(),
-            Vector3::zeros(),
-            Vector3::new(1.0, 2.0, 0.5),
-            2.0,
-            0.5,
-        );
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::new(1.0, 2.0, 0.5), 2.0, 0.5);
         // A full, correlated P to exercise every block.
         for i in 0..N {
             for j in 0..N {
-                kf.P[(i, j)] +=
-                    0.01 * ((i * 7 + j * 3) % 5) as f64 * if i == j { 10.0 } else { 1.0 };
+                kf.P[(i, j)] += 0.01 * ((i * 7 + j * 3) % 5) as f64 * if i == j { 10.0 } else { 1.0 };
             }
         }
         kf.P = (kf.P + kf.P.transpose()) * 0.5;
         let p0 = kf.P;
         let q = UnitQuaternion::from_euler_angles(0.2, -0.1, 1.0);
-        let imu = ImuInput {
-            f_body: Vector3::new(0.3, 0.1, -9.9),
-            q,
-        };
+        let imu = ImuInput { f_body: Vector3::new(0.3, 0.1, -9.9), q };
         kf.predict(0.05, Some(&imu)).unwrap();
         kf.predict(0.05, Some(&imu)).unwrap();
         let pd = kf.pending;
@@ -703,11 +613,7 @@ mod tests {
         F.fixed_view_mut::<3, 3>(0, 6).copy_from(&pd.phi_pb);
         F.fixed_view_mut::<3, 3>(3, 6).copy_from(&pd.phi_vb);
         let dense = F * p0 * F.transpose() + Q;
-        assert!(
-            (kf.P - dense).abs().max() < 1e-12,
-            "{}",
-            (kf.P - dense).abs().max()
-        );
+        assert!((kf.P - dense).abs().max() < 1e-12, "{}", (kf.P - dense).abs().max());
         // Closed form of the bias sensitivity for constant C over 0.1 s.
         let C = q.to_rotation_matrix().into_inner();
         assert!((pd.phi_vb + C * 0.1).abs().max() < 1e-15);
@@ -716,17 +622,8 @@ mod tests {
 
     #[test]
     fn held_bias_is_left_alone_and_p_is_the_joseph_form_of_that_gain() {
-        let mut kf = Kf::new(
-            FilterNoise::default(),
-            Vector3::zeros(),
-            Vector3::zeros(),
-            2.0,
-            0.5,
-        );
-        let imu = ImuInput {
-            f_body: Vector3::new(0.3, -0.2, -9.81),
-            q: level(),
-        };
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 2.0, 0.5);
+        let imu = ImuInput { f_body: Vector3::new(0.3, -0.2, -9.81), q: level() };
         kf.predict(1.0, Some(&imu)).unwrap();
         kf.flush().unwrap();
         kf.set_hold_bias(true);
@@ -739,21 +636,10 @@ mod tests {
                 assert_abs_diff_eq!(kf.P[(i, j)], p0[(i, j)], epsilon = 1e-15);
             }
         }
-        assert!(
-            kf.x[IV] > x0[IV] + 0.01,
-            "velocity {} -> {}",
-            x0[IV],
-            kf.x[IV]
-        );
+        assert!(kf.x[IV] > x0[IV] + 0.01, "velocity {} -> {}", x0[IV], kf.x[IV]);
         // The first scalar update against the dense Joseph form with the
         // bias rows of K zeroed: (I − khᵀ)P(I − khᵀ)ᵀ + r kkᵀ.
-        let mut kf1 = Kf::new(
-            FilterNoise::default(),
-            Vector3::zeros(),
-            Vector3::zeros(),
-            2.0,
-            0.5,
-        );
+        let mut kf1 = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 2.0, 0.5);
         kf1.predict(1.0, Some(&imu)).unwrap();
         kf1.flush().unwrap();
         kf1.set_hold_bias(true);
@@ -768,19 +654,9 @@ mod tests {
         let a = StateMat::identity() - k * h.transpose();
         let dense = a * p * a.transpose() + k * k.transpose() * r;
         kf1.scalar_update(&[(IV, 1.0)], 0.4, r).unwrap();
-        assert!(
-            (kf1.P - dense).abs().max() < 1e-12,
-            "{}",
-            (kf1.P - dense).abs().max()
-        );
+        assert!((kf1.P - dense).abs().max() < 1e-12, "{}", (kf1.P - dense).abs().max());
         // Without the hold the same update moves the bias.
-        let mut kf2 = Kf::new(
-            FilterNoise::default(),
-            Vector3::zeros(),
-            Vector3::zeros(),
-            2.0,
-            0.5,
-        );
+        let mut kf2 = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 2.0, 0.5);
         kf2.predict(1.0, Some(&imu)).unwrap();
         kf2.update_velocity(&Vector3::new(0.4, 0.0, 0.0)).unwrap();
         assert!((kf2.accel_bias() - x0.fixed_rows::<3>(IB)).norm() > 1e-4);
@@ -788,21 +664,10 @@ mod tests {
 
     #[test]
     fn non_finite_input_is_an_error_not_a_panic() {
-        let mut kf = Kf::new(
-            FilterNoise::default(),
-            Vector3::zeros(),
-            Vector3::zeros(),
-            1.0,
-            0.1,
-        );
+        let mut kf = Kf::new(FilterNoise::default(), Vector3::zeros(), Vector3::zeros(), 1.0, 0.1);
         assert!(kf.predict(f64::NAN, None).is_err());
-        assert!(kf
-            .update_position(&Vector3::new(f64::NAN, 0.0, 0.0))
-            .is_err());
-        let imu = ImuInput {
-            f_body: Vector3::new(1e308, 1e308, 1e308),
-            q: level(),
-        };
+        assert!(kf.update_position(&Vector3::new(f64::NAN, 0.0, 0.0)).is_err());
+        let imu = ImuInput { f_body: Vector3::new(1e308, 1e308, 1e308), q: level() };
         assert!(kf.predict(1e10, Some(&imu)).is_err());
     }
 

@@ -4,8 +4,8 @@
 //! radii at the anchor: under 1 cm error per km of distance, which is below
 //! GPS noise for any UAV flight area.
 
-use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
+use nalgebra::Vector3;
 
 use crate::sample::Sample;
 
@@ -29,11 +29,7 @@ impl Anchor {
         let w = (1.0 - E2 * s * s).sqrt();
         let rm = A * (1.0 - E2) / (w * w * w); // meridian radius
         let rp = A / w; // prime vertical radius
-        Anchor {
-            lla: Some((lat, lon, alt)),
-            rn: rm + alt,
-            re: (rp + alt) * libm::cos(phi),
-        }
+        Anchor { lla: Some((lat, lon, alt)), rn: rm + alt, re: (rp + alt) * libm::cos(phi) }
     }
 
     /// Anchor from a row with a fix (lat/lon/alt preferred over pn/pe/pd).
@@ -41,11 +37,7 @@ impl Anchor {
         if s.lat.is_finite() && s.lon.is_finite() && s.alt.is_finite() {
             Anchor::at(s.lat, s.lon, s.alt)
         } else {
-            Anchor {
-                lla: None,
-                rn: 0.0,
-                re: 0.0,
-            }
+            Anchor { lla: None, rn: 0.0, re: 0.0 }
         }
     }
 
@@ -60,11 +52,7 @@ impl Anchor {
                 } else if dlon < -180.0 {
                     dlon += 360.0;
                 }
-                Vector3::new(
-                    (lat - lat0).to_radians() * self.rn,
-                    dlon.to_radians() * self.re,
-                    alt0 - alt,
-                )
+                Vector3::new((lat - lat0).to_radians() * self.rn, dlon.to_radians() * self.re, alt0 - alt)
             }
             None => Vector3::new(f64::NAN, f64::NAN, f64::NAN),
         }
@@ -85,11 +73,7 @@ impl Anchor {
     /// Inverse of [`Anchor::lla_to_ned`].
     pub fn ned_to_lla(&self, p: &Vector3<f64>) -> Option<(f64, f64, f64)> {
         let (lat0, lon0, alt0) = self.lla?;
-        Some((
-            lat0 + (p[0] / self.rn).to_degrees(),
-            lon0 + (p[1] / self.re).to_degrees(),
-            alt0 - p[2],
-        ))
+        Some((lat0 + (p[0] / self.rn).to_degrees(), lon0 + (p[1] / self.re).to_degrees(), alt0 - p[2]))
     }
 }
 
@@ -116,10 +100,6 @@ mod tests {
         let q = a.lla_to_ned(la, lo, al);
         assert_abs_diff_eq!((p - q).norm(), 0.0, epsilon = 1e-6);
         // 0.001° of longitude at 47.4° ≈ 75.4 m.
-        assert_abs_diff_eq!(
-            a.lla_to_ned(47.3977, 8.5466, 488.0)[1],
-            75.45,
-            epsilon = 0.1
-        );
+        assert_abs_diff_eq!(a.lla_to_ned(47.3977, 8.5466, 488.0)[1], 75.45, epsilon = 0.1);
     }
 }

@@ -182,13 +182,7 @@ pub struct SlidingSum {
 impl SlidingSum {
     pub fn new(cap: usize) -> Self {
         let cap = cap.max(1);
-        SlidingSum {
-            buf: vec![[0.0; SUMS]; cap],
-            head: 0,
-            len: 0,
-            total: [0.0; SUMS],
-            since_resum: 0,
-        }
+        SlidingSum { buf: vec![[0.0; SUMS]; cap], head: 0, len: 0, total: [0.0; SUMS], since_resum: 0 }
     }
 
     pub fn clear(&mut self) {
@@ -277,8 +271,7 @@ impl Indicators {
     pub fn r_driver(&self) -> Option<usize> {
         let mut best: Option<usize> = None;
         for g in 0..GROUPS {
-            if self.r_group[g].is_finite() && best.is_none_or(|b| self.r_group[g] > self.r_group[b])
-            {
+            if self.r_group[g].is_finite() && best.is_none_or(|b| self.r_group[g] > self.r_group[b]) {
                 best = Some(g);
             }
         }
@@ -318,12 +311,7 @@ pub struct IndicatorSettings {
 
 impl Default for IndicatorSettings {
     fn default() -> Self {
-        IndicatorSettings {
-            window: 10,
-            floor: [0.15, 0.06, 0.2],
-            initial: [0.3, 0.1, 0.3],
-            alpha: 0.02,
-        }
+        IndicatorSettings { window: 10, floor: [0.15, 0.06, 0.2], initial: [0.3, 0.1, 0.3], alpha: 0.02 }
     }
 }
 
@@ -427,10 +415,7 @@ impl PvTest {
             self.inc_len = 0;
             return;
         }
-        let z2 = (0..3)
-            .map(|a| (u[a] * u[a] / self.ms_u[a].max(PV_U_FLOOR * PV_U_FLOOR)).min(1e6))
-            .sum::<f64>()
-            / 3.0;
+        let z2 = (0..3).map(|a| (u[a] * u[a] / self.ms_u[a].max(PV_U_FLOOR * PV_U_FLOOR)).min(1e6)).sum::<f64>() / 3.0;
         self.inc[self.inc_head] = z2;
         self.inc_head = (self.inc_head + 1) % self.inc_cap;
         self.inc_len = (self.inc_len + 1).min(self.inc_cap);
@@ -442,10 +427,7 @@ impl PvTest {
         if self.inc_len == 0 {
             return f64::NAN;
         }
-        self.inc[..self.inc_len]
-            .iter()
-            .fold(f64::INFINITY, |m, &z| m.min(z))
-            .sqrt()
+        self.inc[..self.inc_len].iter().fold(f64::INFINITY, |m, &z| m.min(z)).sqrt()
     }
     fn push(&mut self, u: [f64; 3]) {
         if !u.iter().all(|v| v.is_finite()) {
@@ -520,10 +502,7 @@ impl PvTest {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 // serde implements arrays per length, not for a generic `D`: state the bound
 // so the impls exist for the lengths used (1 and 2).
-#[serde(bound(
-    serialize = "[f64; D]: Serialize",
-    deserialize = "[f64; D]: Deserialize<'de>"
-))]
+#[serde(bound(serialize = "[f64; D]: Serialize", deserialize = "[f64; D]: Deserialize<'de>"))]
 pub struct LagTest<const D: usize> {
     ring: Vec<(f64, [f64; D])>,
     head: usize,
@@ -557,15 +536,7 @@ pub struct LagTest<const D: usize> {
 }
 
 impl<const D: usize> LagTest<D> {
-    pub fn new(
-        cap: usize,
-        span: f64,
-        sigma0: f64,
-        floor: f64,
-        alpha: f64,
-        tau: f64,
-        fast_start: bool,
-    ) -> Self {
+    pub fn new(cap: usize, span: f64, sigma0: f64, floor: f64, alpha: f64, tau: f64, fast_start: bool) -> Self {
         LagTest {
             ring: vec![(0.0, [0.0; D]); cap.max(2)],
             head: 0,
@@ -705,11 +676,7 @@ impl<const D: usize> LagTest<D> {
         };
         self.t_rate = self.last_t;
         self.learnt = self.learnt.saturating_add(1);
-        let alpha = if self.fast_start {
-            self.alpha.max(1.0 / self.learnt as f64)
-        } else {
-            self.alpha
-        };
+        let alpha = if self.fast_start { self.alpha.max(1.0 / self.learnt as f64) } else { self.alpha };
         for a in 0..D {
             let s = self.last_s[a];
             if s.is_finite() {
@@ -779,18 +746,8 @@ impl IndicatorEngine {
                 r_imu: f64::NAN,
             },
             pv: PvTest::new(PV_WINDOW_FACTOR * w),
-            baro: LagTest::new(
-                BARO_CAP,
-                BARO_SPAN,
-                BARO_SIGMA0,
-                BARO_FLOOR,
-                BARO_ALPHA,
-                BARO_TAU,
-                false,
-            ),
-            imu: LagTest::new(
-                IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true,
-            ),
+            baro: LagTest::new(BARO_CAP, BARO_SPAN, BARO_SIGMA0, BARO_FLOOR, BARO_ALPHA, BARO_TAU, false),
+            imu: LagTest::new(IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true),
             baro_pending: f64::NAN,
             imu_pending: f64::NAN,
             imu_fold: false,
@@ -812,62 +769,26 @@ impl IndicatorEngine {
         let fresh = IndicatorEngine::new(*set);
         let ring = |name: &str, cap: usize, want: usize, head: usize, len: usize| {
             if cap != want || head >= cap || len > cap {
-                Err(format!("indicator window {name}: capacity {cap} / head {head} / len {len}, expected capacity {want}"))
+                Err(format!(
+                    "indicator window {name}: capacity {cap} / head {head} / len {len}, expected capacity {want}"
+                ))
             } else {
                 Ok(())
             }
         };
-        ring(
-            "long",
-            self.long.buf.len(),
-            fresh.long.buf.len(),
-            self.long.head,
-            self.long.len,
-        )?;
-        ring(
-            "short",
-            self.short.buf.len(),
-            fresh.short.buf.len(),
-            self.short.head,
-            self.short.len,
-        )?;
-        ring(
-            "pv",
-            self.pv.ring.len(),
-            fresh.pv.ring.len(),
-            self.pv.head,
-            self.pv.len,
-        )?;
-        ring(
-            "pv.inc",
-            self.pv.inc_cap,
-            fresh.pv.inc_cap,
-            self.pv.inc_head,
-            self.pv.inc_len,
-        )?;
-        ring(
-            "baro",
-            self.baro.ring.len(),
-            fresh.baro.ring.len(),
-            self.baro.head,
-            self.baro.len,
-        )?;
-        ring(
-            "imu",
-            self.imu.ring.len(),
-            fresh.imu.ring.len(),
-            self.imu.head,
-            self.imu.len,
-        )?;
+        ring("long", self.long.buf.len(), fresh.long.buf.len(), self.long.head, self.long.len)?;
+        ring("short", self.short.buf.len(), fresh.short.buf.len(), self.short.head, self.short.len)?;
+        ring("pv", self.pv.ring.len(), fresh.pv.ring.len(), self.pv.head, self.pv.len)?;
+        ring("pv.inc", self.pv.inc_cap, fresh.pv.inc_cap, self.pv.inc_head, self.pv.inc_len)?;
+        ring("baro", self.baro.ring.len(), fresh.baro.ring.len(), self.baro.head, self.baro.len)?;
+        ring("imu", self.imu.ring.len(), fresh.imu.ring.len(), self.imu.head, self.imu.len)?;
         Ok(())
     }
 
     /// σ_Δ currently used for an axis.
     pub fn sigma(&self, axis: usize) -> f64 {
         let g = group_of(axis);
-        self.axes
-            .get(axis)
-            .map_or(f64::NAN, |a| a.ms.sqrt().max(self.set.floor[g]))
+        self.axes.get(axis).map_or(f64::NAN, |a| a.ms.sqrt().max(self.set.floor[g]))
     }
 
     /// Record one axis' residual `r` (innovation), its predicted change `m`
@@ -971,11 +892,7 @@ impl IndicatorEngine {
         self.baro.set_hold(held);
         let st = self.baro.push(t, [z]);
         if st.is_finite() {
-            self.baro_pending = if self.baro_pending.is_finite() {
-                self.baro_pending.max(st)
-            } else {
-                st
-            };
+            self.baro_pending = if self.baro_pending.is_finite() { self.baro_pending.max(st) } else { st };
         }
         st
     }
@@ -998,11 +915,7 @@ impl IndicatorEngine {
     pub fn observe_imu(&mut self, t: f64, z: [f64; 2]) {
         let st = self.imu.push(t, z);
         if st.is_finite() {
-            self.imu_pending = if self.imu_pending.is_finite() {
-                self.imu_pending.max(st)
-            } else {
-                st
-            };
+            self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.max(st) } else { st };
         }
     }
 
@@ -1166,12 +1079,7 @@ mod tests {
     }
 
     fn settings(w: usize) -> IndicatorSettings {
-        IndicatorSettings {
-            window: w,
-            floor: [0.1, 0.1, 0.1],
-            initial: [0.1, 0.1, 0.1],
-            alpha: 0.0,
-        }
+        IndicatorSettings { window: w, floor: [0.1, 0.1, 0.1], initial: [0.1, 0.1, 0.1], alpha: 0.0 }
     }
 
     #[test]
@@ -1199,12 +1107,7 @@ mod tests {
         let mut e = IndicatorEngine::new(settings(8));
         let mut rs = vec![];
         // 3 normal epochs (accepted), 5 epochs with a 1 m step (rejected), 3 normal.
-        let seq: Vec<f64> = [0.0; 3]
-            .iter()
-            .chain([1.0; 5].iter())
-            .chain([0.0; 3].iter())
-            .cloned()
-            .collect();
+        let seq: Vec<f64> = [0.0; 3].iter().chain([1.0; 5].iter()).chain([0.0; 3].iter()).cloned().collect();
         for (k, r) in seq.iter().enumerate() {
             let prev = e.previous(0);
             e.observe(0, *r, 0.0, 0.0);
@@ -1215,18 +1118,10 @@ mod tests {
             }
         }
         for k in 3..8 {
-            assert!(
-                rs[k] > 2.5,
-                "epoch {k}: R={} should stay high during the step",
-                rs[k]
-            );
+            assert!(rs[k] > 2.5, "epoch {k}: R={} should stay high during the step", rs[k]);
         }
         // Short window is ⌈8/4⌉=2 epochs: first clean epoch still shares it with the last faulty one.
-        assert!(
-            rs[9] < 1e-9,
-            "R must fall once the short window is clean: {:?}",
-            rs
-        );
+        assert!(rs[9] < 1e-9, "R must fall once the short window is clean: {:?}", rs);
     }
 
     #[test]

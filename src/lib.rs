@@ -17,10 +17,10 @@ pub mod methods;
 pub mod metrics;
 pub mod sample;
 pub mod sim;
-pub mod snapshot;
 pub mod thresholds;
-pub mod tight;
 pub mod ugv;
+pub mod tight;
+pub mod snapshot;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;

@@ -28,9 +28,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::thresholds::{
-    AdaptiveConfig, Evaluator, Method as ThMethod, SpeedBands, ThresholdPool, Verdict,
-};
+use crate::thresholds::{AdaptiveConfig, Evaluator, Method as ThMethod, SpeedBands, ThresholdPool, Verdict};
 
 /// Detection method (`config.method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -48,16 +46,8 @@ pub enum Method {
 }
 
 impl Method {
-    pub const ALL: [Method; 8] = [
-        Method::Anfis,
-        Method::Chi2,
-        Method::Nis,
-        Method::Gate,
-        Method::Mahalanobis,
-        Method::Rms,
-        Method::Knee,
-        Method::Adaptive,
-    ];
+    pub const ALL: [Method; 8] =
+        [Method::Anfis, Method::Chi2, Method::Nis, Method::Gate, Method::Mahalanobis, Method::Rms, Method::Knee, Method::Adaptive];
 
     pub fn name(self) -> &'static str {
         match self {
@@ -73,29 +63,17 @@ impl Method {
     }
 
     pub fn parse(s: &str) -> Result<Method, String> {
-        Method::ALL
-            .iter()
-            .copied()
-            .find(|m| m.name() == s)
-            .ok_or_else(|| {
-                let names: Vec<String> = Method::ALL
-                    .iter()
-                    .map(|m| format!("\"{}\"", m.name()))
-                    .collect();
-                format!(
-                    "config.method: unknown method \"{s}\" (available: {})",
-                    names.join(", ")
-                )
-            })
+        Method::ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
+            let names: Vec<String> = Method::ALL.iter().map(|m| format!("\"{}\"", m.name())).collect();
+            format!("config.method: unknown method \"{s}\" (available: {})", names.join(", "))
+        })
     }
 }
 
 /// `N_{α/2}` for α = 0.001: the two-sided standard normal quantile.
 pub const N_ALPHA_HALF: f64 = 3.290_526_731_491_926;
 /// χ²_m(1 − α) for α = 0.001, m = 1..=6.
-pub const CHI2_999: [f64; 6] = [
-    10.827_566, 13.815_511, 16.266_236, 18.466_827, 20.515_006, 22.457_744,
-];
+pub const CHI2_999: [f64; 6] = [10.827_566, 13.815_511, 16.266_236, 18.466_827, 20.515_006, 22.457_744];
 /// χ²₇(1 − α), α = 0.001 (six GPS channels and the baro).
 pub const CHI2_999_7: f64 = 24.321_886;
 /// The innovation gate of PX4 EKF2 (`EKF2_GPS_P_GATE`, `EKF2_GPS_V_GATE`)
@@ -120,8 +98,7 @@ impl EpochInnovations {
     /// Normalised innovations `γ_i = |ν_i| / √S_i` with each channel's
     /// group (0 position, 1 velocity, 2 baro).
     pub fn gamma(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let gps =
-            (0..self.m).map(move |i| (i / 3, self.nu[i].abs() / self.s[(i, i)].max(1e-12).sqrt()));
+        let gps = (0..self.m).map(move |i| (i / 3, self.nu[i].abs() / self.s[(i, i)].max(1e-12).sqrt()));
         gps.chain(self.baro.map(|(nu, s)| (2, nu.abs() / s.max(1e-12).sqrt())))
     }
 
@@ -147,10 +124,7 @@ pub fn chi2(inn: &EpochInnovations) -> Decision {
         worst = worst.max(g);
         failed[grp] |= g > N_ALPHA_HALF;
     }
-    Decision {
-        score: worst / N_ALPHA_HALF,
-        failed,
-    }
+    Decision { score: worst / N_ALPHA_HALF, failed }
 }
 
 /// Whole-vector chi-square test (normalised innovation squared).
@@ -167,11 +141,7 @@ pub fn nis(inn: &EpochInnovations) -> Decision {
         Some((nu, s)) => (q + nu * nu / s.max(1e-12), m + 1),
         None => (q, m),
     };
-    let gate = if m_all <= 6 {
-        CHI2_999[m_all.clamp(1, 6) - 1]
-    } else {
-        CHI2_999_7
-    };
+    let gate = if m_all <= 6 { CHI2_999[m_all.clamp(1, 6) - 1] } else { CHI2_999_7 };
     let score = q / gate;
     // The vector test cannot say which group; per-group χ²₃ tests do.
     let group = |g: usize| {
@@ -181,17 +151,8 @@ pub fn nis(inn: &EpochInnovations) -> Decision {
         let s3: Matrix3<f64> = inn.s.fixed_view::<3, 3>(3 * g, 3 * g).into_owned();
         quad::<3>(&s3, &[inn.nu[3 * g], inn.nu[3 * g + 1], inn.nu[3 * g + 2]]) > CHI2_999[2]
     };
-    let baro = inn
-        .baro
-        .is_some_and(|(nu, s)| nu * nu / s.max(1e-12) > CHI2_999[0]);
-    Decision {
-        score,
-        failed: [
-            score >= 1.0 && group(0),
-            score >= 1.0 && group(1),
-            score >= 1.0 && baro,
-        ],
-    }
+    let baro = inn.baro.is_some_and(|(nu, s)| nu * nu / s.max(1e-12) > CHI2_999[0]);
+    Decision { score, failed: [score >= 1.0 && group(0), score >= 1.0 && group(1), score >= 1.0 && baro] }
 }
 
 /// `νᵀ S⁻¹ ν` by Cholesky; a non-positive-definite `S` gives +∞ (the epoch
@@ -213,10 +174,7 @@ pub fn gate(inn: &EpochInnovations) -> Decision {
         worst = worst.max(ratio);
         failed[grp] |= ratio > 1.0;
     }
-    Decision {
-        score: worst,
-        failed,
-    }
+    Decision { score: worst, failed }
 }
 
 /// Normal epochs in the Mahalanobis reference window.
@@ -243,26 +201,12 @@ pub struct MahaWindow {
 
 impl Default for MahaWindow {
     fn default() -> Self {
-        MahaWindow {
-            ring: vec![[0.0; 3]; MAHA_WINDOW],
-            head: 0,
-            len: 0,
-            sum: [0.0; 3],
-            sq: [0.0; 6],
-            since_resum: 0,
-        }
+        MahaWindow { ring: vec![[0.0; 3]; MAHA_WINDOW], head: 0, len: 0, sum: [0.0; 3], sq: [0.0; 6], since_resum: 0 }
     }
 }
 
 fn outer(x: &[f64; 3]) -> [f64; 6] {
-    [
-        x[0] * x[0],
-        x[0] * x[1],
-        x[0] * x[2],
-        x[1] * x[1],
-        x[1] * x[2],
-        x[2] * x[2],
-    ]
+    [x[0] * x[0], x[0] * x[1], x[0] * x[2], x[1] * x[1], x[1] * x[2], x[2] * x[2]]
 }
 
 impl MahaWindow {
@@ -278,10 +222,7 @@ impl MahaWindow {
     pub fn check_shape(&self) -> Result<(), String> {
         let cap = self.ring.len();
         if cap != MAHA_WINDOW || self.head >= cap || self.len > cap {
-            return Err(format!(
-                "mahalanobis window: capacity {cap} / head {} / len {}",
-                self.head, self.len
-            ));
+            return Err(format!("mahalanobis window: capacity {cap} / head {} / len {}", self.head, self.len));
         }
         Ok(())
     }
@@ -335,17 +276,7 @@ impl MahaWindow {
         let mu = Vector3::new(self.sum[0] / n, self.sum[1] / n, self.sum[2] / n);
         let q = &self.sq;
         let e = |k: usize, i: usize, j: usize| (q[k] - n * mu[i] * mu[j]) / (n - 1.0);
-        let mut c = Matrix3::new(
-            e(0, 0, 0),
-            e(1, 0, 1),
-            e(2, 0, 2),
-            e(1, 0, 1),
-            e(3, 1, 1),
-            e(4, 1, 2),
-            e(2, 0, 2),
-            e(4, 1, 2),
-            e(5, 2, 2),
-        );
+        let mut c = Matrix3::new(e(0, 0, 0), e(1, 0, 1), e(2, 0, 2), e(1, 0, 1), e(3, 1, 1), e(4, 1, 2), e(2, 0, 2), e(4, 1, 2), e(5, 2, 2));
         let ridge = 1e-6 + 1e-3 * c.trace() / 3.0;
         for i in 0..3 {
             c[(i, i)] += ridge;
@@ -377,10 +308,7 @@ pub fn mahalanobis(win: &[MahaWindow; 2], dr: [[f64; 3]; 2], has_vel: bool) -> D
             failed[g] = d2 > MAHA_D2;
         }
     }
-    Decision {
-        score: worst,
-        failed,
-    }
+    Decision { score: worst, failed }
 }
 
 /// A Baek & Jo threshold pool on the detector's residual (the epoch's
@@ -394,9 +322,7 @@ pub struct PoolState {
 impl PoolState {
     /// Decide one epoch at horizontal speed `speed` (m/s).
     pub fn decide(&mut self, inn: &EpochInnovations, speed: f64) -> Decision {
-        let (grp, g) = inn
-            .gamma()
-            .fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
+        let (grp, g) = inn.gamma().fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
         let mode = self.bands.mode_of(speed).unwrap_or(0);
         let rt = self.eval.rms_threshold(mode);
         let mut failed = [false; 3];
@@ -427,33 +353,19 @@ pub fn default_pool(method: Method) -> Result<PoolState, String> {
         Method::Adaptive => 2,
         m => return Err(format!("method \"{}\" has no threshold pool", m.name())),
     };
-    let pools = POOLS
-        .get_or_init(|| fit_pools(1000..1006))
-        .as_ref()
-        .map_err(|e| e.clone())?;
+    let pools = POOLS.get_or_init(|| fit_pools(1000..1006)).as_ref().map_err(|e| e.clone())?;
     Ok(pools[k].clone())
 }
 
 /// Run `method` over clean simulated flights (aggressive, survey and paper
 /// trajectories, 300 s, seeds `seeds`) with verdicts forced normal, calling
 /// `each(detector, score)` at every GPS epoch with a positive score.
-fn clean_epochs(
-    seeds: core::ops::Range<u64>,
-    method: Method,
-    mut each: impl FnMut(&crate::Detector, f64),
-) -> Result<(), String> {
+fn clean_epochs(seeds: core::ops::Range<u64>, method: Method, mut each: impl FnMut(&crate::Detector, f64)) -> Result<(), String> {
     use crate::sim::{simulate, Scenario, Trajectory};
     for seed in seeds {
-        for tr in [
-            Trajectory::Aggressive,
-            Trajectory::Survey,
-            Trajectory::Paper,
-        ] {
+        for tr in [Trajectory::Aggressive, Trajectory::Survey, Trajectory::Paper] {
             let rows = simulate(&Scenario::clean(tr, seed, 300.0))?;
-            let mut det = crate::Detector::new(crate::Config {
-                method,
-                ..crate::Config::default()
-            })?;
+            let mut det = crate::Detector::new(crate::Config { method, ..crate::Config::default() })?;
             det.set_oracle(true);
             for s in &rows {
                 let o = det.push(s).map_err(|e| e.to_string())?;
@@ -476,8 +388,7 @@ pub fn fit_pools(seeds: core::ops::Range<u64>) -> Result<[PoolState; 3], String>
     })?;
     let mut speeds: Vec<f64> = data.iter().map(|d| d.0).collect();
     speeds.sort_by(f64::total_cmp);
-    let q =
-        |p: f64| speeds[((speeds.len() as f64 * p) as usize).min(speeds.len().saturating_sub(1))];
+    let q = |p: f64| speeds[((speeds.len() as f64 * p) as usize).min(speeds.len().saturating_sub(1))];
     let mut edges = vec![q(0.25), q(0.5), q(0.75)];
     edges.dedup_by(|a, b| *a <= *b + 1e-6);
     let bands = SpeedBands::new(edges)?;
@@ -489,10 +400,7 @@ pub fn fit_pools(seeds: core::ops::Range<u64>) -> Result<[PoolState; 3], String>
     let cfg = AdaptiveConfig::default();
     let fit = |m: ThMethod| -> Result<PoolState, String> {
         let pool = ThresholdPool::fit(m, &per_ref, &cfg)?;
-        Ok(PoolState {
-            bands: bands.clone(),
-            eval: Evaluator::new(pool)?,
-        })
+        Ok(PoolState { bands: bands.clone(), eval: Evaluator::new(pool)? })
     };
     Ok([fit(ThMethod::Rt)?, fit(ThMethod::Kt)?, fit(ThMethod::At)?])
 }
@@ -521,31 +429,18 @@ mod tests {
         for i in 0..6 {
             sm[(i, i)] = s[i];
         }
-        EpochInnovations {
-            nu,
-            s: sm,
-            m,
-            baro: None,
-        }
+        EpochInnovations { nu, s: sm, m, baro: None }
     }
 
     #[test]
     fn chi2_hand_case() {
         // γ = |ν|/√S: position E has 3.3/1 > 3.29, the rest are small.
-        let inn = diag(
-            [0.5, 3.3, -1.0, 0.1, 0.2, 0.3],
-            [1.0, 1.0, 4.0, 0.01, 0.01, 0.01],
-            6,
-        );
+        let inn = diag([0.5, 3.3, -1.0, 0.1, 0.2, 0.3], [1.0, 1.0, 4.0, 0.01, 0.01, 0.01], 6);
         let d = chi2(&inn);
         assert_relative_eq!(d.score, 3.3 / N_ALPHA_HALF, epsilon = 1e-12);
         assert_eq!(d.failed, [true, false, false]);
         // Velocity N: 0.4/√0.01 = 4 fails; position passes.
-        let inn = diag(
-            [0.5, 1.0, -1.0, 0.4, 0.2, 0.3],
-            [1.0, 1.0, 4.0, 0.01, 0.01, 0.01],
-            6,
-        );
+        let inn = diag([0.5, 1.0, -1.0, 0.4, 0.2, 0.3], [1.0, 1.0, 4.0, 0.01, 0.01, 0.01], 6);
         let d = chi2(&inn);
         assert_relative_eq!(d.score, 4.0 / N_ALPHA_HALF, epsilon = 1e-12);
         assert_eq!(d.failed, [false, true, false]);
@@ -556,22 +451,14 @@ mod tests {
     #[test]
     fn nis_hand_case_with_correlation() {
         // S = [[2,1,0],[1,2,0],[0,0,1]], ν = (1,1,0): S⁻¹ν = (1/3,1/3,0), q = 2/3.
-        let mut inn = diag(
-            [1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-            [2.0, 2.0, 1.0, 1.0, 1.0, 1.0],
-            3,
-        );
+        let mut inn = diag([1.0, 1.0, 0.0, 0.0, 0.0, 0.0], [2.0, 2.0, 1.0, 1.0, 1.0, 1.0], 3);
         inn.s[(0, 1)] = 1.0;
         inn.s[(1, 0)] = 1.0;
         let d = nis(&inn);
         assert_relative_eq!(d.score, (2.0 / 3.0) / CHI2_999[2], epsilon = 1e-12);
         assert_eq!(d.failed, [false, false, false]);
         // Diagonal, m = 6: q = Σ ν²/S = 16 + 9 = 25 > 22.46.
-        let inn = diag(
-            [4.0, 0.0, 0.0, 0.3, 0.0, 0.0],
-            [1.0, 1.0, 1.0, 0.01, 0.01, 0.01],
-            6,
-        );
+        let inn = diag([4.0, 0.0, 0.0, 0.3, 0.0, 0.0], [1.0, 1.0, 1.0, 0.01, 0.01, 0.01], 6);
         let d = nis(&inn);
         assert_relative_eq!(d.score, 25.0 / CHI2_999[5], epsilon = 1e-9);
         // Per group: position 16 < 16.27 passes, velocity 9 passes: the
@@ -608,9 +495,7 @@ mod tests {
         let mut xs = vec![];
         let mut s = 12345u64;
         let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         };
         for _ in 0..130 {
@@ -621,9 +506,7 @@ mod tests {
         // Direct: the last 50 samples.
         let last = &xs[xs.len() - MAHA_WINDOW..];
         let n = last.len() as f64;
-        let mu: Vec<f64> = (0..3)
-            .map(|a| last.iter().map(|x| x[a]).sum::<f64>() / n)
-            .collect();
+        let mu: Vec<f64> = (0..3).map(|a| last.iter().map(|x| x[a]).sum::<f64>() / n).collect();
         let mut c = Matrix3::zeros();
         for x in last {
             for i in 0..3 {
@@ -647,10 +530,7 @@ mod tests {
     fn mahalanobis_threshold_is_reproducible() {
         let q = calibrate_mahalanobis(1000..1004).unwrap();
         println!("calibrated d² threshold {q:.2} (shipped {MAHA_D2})");
-        assert!(
-            (q - MAHA_D2).abs() <= 0.05 * MAHA_D2,
-            "recalibrated {q:.2}, shipped {MAHA_D2}"
-        );
+        assert!((q - MAHA_D2).abs() <= 0.05 * MAHA_D2, "recalibrated {q:.2}, shipped {MAHA_D2}");
     }
 
     #[test]
@@ -659,9 +539,6 @@ mod tests {
             assert_eq!(Method::parse(m.name()).unwrap(), m);
         }
         let e = Method::parse("magic").unwrap_err();
-        assert!(
-            e.contains("config.method") && e.contains("magic") && e.contains("\"knee\""),
-            "{e}"
-        );
+        assert!(e.contains("config.method") && e.contains("magic") && e.contains("\"knee\""), "{e}");
     }
 }

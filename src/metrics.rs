@@ -91,16 +91,8 @@ impl Accumulator {
         m.precision = ratio(m.tp, m.tp + m.fp);
         m.recall = ratio(m.tp, m.tp + m.r#fn);
         let (p, r) = (m.precision, m.recall);
-        m.f2 = if p + r > 0.0 {
-            5.0 * p * r / (4.0 * p + r)
-        } else {
-            0.0
-        };
-        m.mean_detection_delay = if m.detected_intervals > 0 {
-            self.delays / m.detected_intervals as f64
-        } else {
-            f64::NAN
-        };
+        m.f2 = if p + r > 0.0 { 5.0 * p * r / (4.0 * p + r) } else { 0.0 };
+        m.mean_detection_delay = if m.detected_intervals > 0 { self.delays / m.detected_intervals as f64 } else { f64::NAN };
         m
     }
 }

@@ -194,18 +194,9 @@ impl Scenario {
     /// `[start, start + length)`. Baro-stuck is moved into the climb.
     pub fn with_fault(kind: FaultKind, magnitude: f64, start: f64, length: f64, seed: u64) -> Self {
         let mut s = Scenario::clean(Trajectory::Paper, seed, 250.0);
-        let start = if kind == FaultKind::BaroStuck {
-            start.clamp(5.0, 55.0 - length.min(50.0))
-        } else {
-            start
-        };
+        let start = if kind == FaultKind::BaroStuck { start.clamp(5.0, 55.0 - length.min(50.0)) } else { start };
         s.name = format!("{}-{}", kind.name(), magnitude);
-        s.faults.push(Fault {
-            kind,
-            start,
-            end: start + length,
-            magnitude,
-        });
+        s.faults.push(Fault { kind, start, end: start + length, magnitude });
         s
     }
 
@@ -228,12 +219,7 @@ impl Scenario {
                 let kind = FaultKind::ALL
                     .iter()
                     .find(|k| k.name() == other)
-                    .ok_or_else(|| {
-                        format!(
-                            "unknown scenario \"{other}\" (try: {})",
-                            preset_names().join(", ")
-                        )
-                    })?;
+                    .ok_or_else(|| format!("unknown scenario \"{other}\" (try: {})", preset_names().join(", ")))?;
                 Scenario::with_fault(*kind, default_magnitude(*kind), 120.0, 15.0, seed)
             }
         })
@@ -247,25 +233,15 @@ impl Scenario {
         if !(self.gps_rate.is_finite() && self.gps_rate > 0.0 && self.gps_rate <= 100.0) {
             return bad("gpsRate", self.gps_rate);
         }
-        if !(self.imu_rate.is_finite()
-            && (self.imu_rate == 0.0
-                || (self.imu_rate >= self.gps_rate && self.imu_rate <= 1000.0)))
-        {
+        if !(self.imu_rate.is_finite() && (self.imu_rate == 0.0 || (self.imu_rate >= self.gps_rate && self.imu_rate <= 1000.0))) {
             return bad("imuRate", self.imu_rate);
         }
         if !(self.baro_rate.is_finite() && self.baro_rate >= 0.0 && self.baro_rate <= 200.0) {
             return bad("baroRate", self.baro_rate);
         }
         for f in &self.faults {
-            if !(f.start.is_finite()
-                && f.end.is_finite()
-                && f.end > f.start
-                && f.magnitude.is_finite())
-            {
-                return Err(format!(
-                    "scenario.faults: bad interval or magnitude {:?}",
-                    f
-                ));
+            if !(f.start.is_finite() && f.end.is_finite() && f.end > f.start && f.magnitude.is_finite()) {
+                return Err(format!("scenario.faults: bad interval or magnitude {:?}", f));
             }
         }
         Ok(())
@@ -273,14 +249,7 @@ impl Scenario {
 }
 
 pub fn preset_names() -> Vec<&'static str> {
-    let mut v = vec![
-        "paper",
-        "paper-silent",
-        "clean-aggressive",
-        "clean-survey",
-        "clean-paper",
-        "gps-only",
-    ];
+    let mut v = vec!["paper", "paper-silent", "clean-aggressive", "clean-survey", "clean-paper", "gps-only"];
     v.extend(FaultKind::ALL.iter().map(|k| k.name()));
     v
 }
@@ -329,15 +298,7 @@ struct Profile {
 impl Profile {
     fn new(kind: Trajectory, rng: &mut Rng) -> Self {
         let mut comp = |n: usize, amp: f64, fmin: f64, fmax: f64| -> Vec<(f64, f64, f64)> {
-            (0..n)
-                .map(|_| {
-                    (
-                        amp * rng.range(0.5, 1.0),
-                        rng.range(fmin, fmax),
-                        rng.range(0.0, 6.283),
-                    )
-                })
-                .collect()
+            (0..n).map(|_| (amp * rng.range(0.5, 1.0), rng.range(fmin, fmax), rng.range(0.0, 6.283))).collect()
         };
         Profile {
             kind,
@@ -350,9 +311,7 @@ impl Profile {
     /// (speed, heading, climb) at time t.
     fn at(&self, t: f64) -> (f64, f64, f64) {
         let sum = |c: &[(f64, f64, f64)], t: f64| -> f64 {
-            c.iter()
-                .map(|(a, f, p)| a * libm::sin(2.0 * core::f64::consts::PI * f * t + p))
-                .sum()
+            c.iter().map(|(a, f, p)| a * libm::sin(2.0 * core::f64::consts::PI * f * t + p)).sum()
         };
         match self.kind {
             Trajectory::Paper => {
@@ -377,8 +336,7 @@ impl Profile {
                     })
                     .sum::<f64>()
                     * 2.5;
-                let climb = sum(&self.climb_c, t) * smooth(t, 0.0, 5.0)
-                    + 1.5 * (1.0 - smooth(t, 0.0, 20.0));
+                let climb = sum(&self.climb_c, t) * smooth(t, 0.0, 5.0) + 1.5 * (1.0 - smooth(t, 0.0, 20.0));
                 (speed, heading, climb)
             }
             Trajectory::Survey => {
@@ -406,11 +364,7 @@ fn thrust_attitude(f_ned: &Vector3<f64>, yaw: f64) -> UnitQuaternion<f64> {
     let zb = -f_ned / n;
     let xc = Vector3::new(libm::cos(yaw), libm::sin(yaw), 0.0);
     let yb = zb.cross(&xc);
-    let yb = if yb.norm() < 1e-9 {
-        Vector3::new(0.0, 1.0, 0.0)
-    } else {
-        yb.normalize()
-    };
+    let yb = if yb.norm() < 1e-9 { Vector3::new(0.0, 1.0, 0.0) } else { yb.normalize() };
     let xb = yb.cross(&zb);
     let m = Matrix3::from_columns(&[xb, yb, zb]);
     UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m))
@@ -426,11 +380,7 @@ struct GaussMarkov {
 
 impl GaussMarkov {
     fn new(sigma: f64, tau: f64, rng: &mut Rng) -> Self {
-        GaussMarkov {
-            x: sigma * rng.normal(),
-            sigma,
-            tau,
-        }
+        GaussMarkov { x: sigma * rng.normal(), sigma, tau }
     }
     fn step(&mut self, dt: f64, rng: &mut Rng) -> f64 {
         let phi = libm::exp(-dt / self.tau);
@@ -460,20 +410,9 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
         GaussMarkov::new(0.8, 120.0, &mut rng),
         GaussMarkov::new(1.5, 120.0, &mut rng),
     ];
-    let acc_bias = Vector3::new(
-        rng.range(-0.05, 0.05),
-        rng.range(-0.05, 0.05),
-        rng.range(-0.05, 0.05),
-    );
-    let tilt0 = Vector3::new(
-        0.2f64.to_radians() * rng.normal(),
-        0.2f64.to_radians() * rng.normal(),
-        0.5f64.to_radians() * rng.normal(),
-    );
-    let mut att_gm = [
-        GaussMarkov::new(0.15f64.to_radians(), 30.0, &mut rng),
-        GaussMarkov::new(0.15f64.to_radians(), 30.0, &mut rng),
-    ];
+    let acc_bias = Vector3::new(rng.range(-0.05, 0.05), rng.range(-0.05, 0.05), rng.range(-0.05, 0.05));
+    let tilt0 = Vector3::new(0.2f64.to_radians() * rng.normal(), 0.2f64.to_radians() * rng.normal(), 0.5f64.to_radians() * rng.normal());
+    let mut att_gm = [GaussMarkov::new(0.15f64.to_radians(), 30.0, &mut rng), GaussMarkov::new(0.15f64.to_radians(), 30.0, &mut rng)];
     let baro_offset = rng.range(-30.0, 30.0);
     let mut baro_gm = GaussMarkov::new(0.3, 60.0, &mut rng);
     // Per-outage degraded-fix errors: offset direction/magnitude.
@@ -485,10 +424,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
             let mag = rng.range(5.0, 12.0);
             let vz = rng.range(3.0, 8.0) * if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
             let vang = rng.range(0.0, 6.283);
-            (
-                Vector3::new(mag * libm::cos(ang), mag * libm::sin(ang), vz),
-                Vector3::new(0.6 * libm::cos(vang), 0.6 * libm::sin(vang), 0.0),
-            )
+            (Vector3::new(mag * libm::cos(ang), mag * libm::sin(ang), vz), Vector3::new(0.6 * libm::cos(vang), 0.6 * libm::sin(vang), 0.0))
         })
         .collect();
     let mut deg_walk = Vector3::zeros();
@@ -497,16 +433,8 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
     let gps_only = sc.imu_rate == 0.0;
     let row_rate = if gps_only { sc.gps_rate } else { sc.imu_rate };
     let n_rows = libm::floor(sc.duration * row_rate + 1e-9) as usize;
-    let gps_every = if gps_only {
-        1
-    } else {
-        ((sc.imu_rate / sc.gps_rate).round() as usize).max(1)
-    };
-    let baro_every = if sc.baro_rate > 0.0 {
-        ((row_rate / sc.baro_rate).round() as usize).max(1)
-    } else {
-        0
-    };
+    let gps_every = if gps_only { 1 } else { ((sc.imu_rate / sc.gps_rate).round() as usize).max(1) };
+    let baro_every = if sc.baro_rate > 0.0 { ((row_rate / sc.baro_rate).round() as usize).max(1) } else { 0 };
     let baro_offset_rows = if baro_every > 2 { 2 } else { 0 };
     let dt_row = 1.0 / row_rate;
 
@@ -529,8 +457,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
         }
         t_prev = t;
         let v = prof.velocity(t);
-        let a = (prof.velocity(t + h) - prof.velocity((t - h).max(0.0)))
-            / if t >= h { 2.0 * h } else { h };
+        let a = (prof.velocity(t + h) - prof.velocity((t - h).max(0.0))) / if t >= h { 2.0 * h } else { h };
         let f_ned = a - g;
         let (_, yaw, _) = prof.at(t);
         let q = thrust_attitude(&f_ned, yaw);
@@ -543,8 +470,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
             let f_next = (prof.velocity(t + 2.0 * h) - prof.velocity(t)) / (2.0 * h) - g;
             let q_next = thrust_attitude(&f_next, prof.at(t + h).1);
             let w = (q.inverse() * q_next).scaled_axis() / h;
-            let mut fb =
-                f_body + acc_bias + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.05;
+            let mut fb = f_body + acc_bias + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.05;
             for (i, ft) in sc.faults.iter().enumerate() {
                 if ft.kind == FaultKind::AccelBias && t >= ft.start && t < ft.end {
                     let d = fault_dirs[i];
@@ -553,11 +479,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
             }
             let e1 = att_gm[0].step(dt_row, &mut rng);
             let e2 = att_gm[1].step(dt_row, &mut rng);
-            let qerr = UnitQuaternion::from_scaled_axis(Vector3::new(
-                tilt0[0] + e1,
-                tilt0[1] + e2,
-                tilt0[2],
-            ));
+            let qerr = UnitQuaternion::from_scaled_axis(Vector3::new(tilt0[0] + e1, tilt0[1] + e2, tilt0[2]));
             let qm = q * qerr;
             s.ax = fb[0];
             s.ay = fb[1];
@@ -579,11 +501,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
                 gps_gm[2].step(gdt, &mut rng) + 0.15 * rng.normal(),
             );
             let mut pm = p + err;
-            let mut vm = v + Vector3::new(
-                0.05 * rng.normal(),
-                0.05 * rng.normal(),
-                0.08 * rng.normal(),
-            );
+            let mut vm = v + Vector3::new(0.05 * rng.normal(), 0.05 * rng.normal(), 0.08 * rng.normal());
             let mut label = 0.0;
             let mut sats = 12.0 + libm::floor(3.0 * rng.uniform());
             let mut eph = 0.8;
@@ -594,12 +512,8 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
                     OutageMode::Silent => present = false,
                     OutageMode::Degraded => {
                         let (off, vb) = deg[oi];
-                        deg_walk += Vector3::new(rng.normal(), rng.normal(), 0.5 * rng.normal())
-                            * (0.8 * libm::sqrt(gdt));
-                        pm = p
-                            + off
-                            + deg_walk
-                            + Vector3::new(rng.normal(), rng.normal(), 2.0 * rng.normal()) * 1.5;
+                        deg_walk += Vector3::new(rng.normal(), rng.normal(), 0.5 * rng.normal()) * (0.8 * libm::sqrt(gdt));
+                        pm = p + off + deg_walk + Vector3::new(rng.normal(), rng.normal(), 2.0 * rng.normal()) * 1.5;
                         vm = v + vb + Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.6;
                         sats = 4.0 + libm::floor(2.0 * rng.uniform());
                         eph = 6.0 + 4.0 * rng.uniform();
@@ -620,8 +534,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
                     FaultKind::Ramp => pm += d * (ft.magnitude * (t - ft.start)),
                     FaultKind::Noise => {
                         pm += Vector3::new(rng.normal(), rng.normal(), rng.normal()) * ft.magnitude;
-                        vm += Vector3::new(rng.normal(), rng.normal(), rng.normal())
-                            * (0.25 * ft.magnitude);
+                        vm += Vector3::new(rng.normal(), rng.normal(), rng.normal()) * (0.25 * ft.magnitude);
                     }
                     FaultKind::Frozen => {
                         let fz = frozen[i].get_or_insert((pm[0], pm[1], pm[2], vm));
@@ -633,10 +546,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
                 }
             }
             if present {
-                let (lat, lon, alt) =
-                    anchor
-                        .ned_to_lla(&pm)
-                        .unwrap_or((f64::NAN, f64::NAN, f64::NAN));
+                let (lat, lon, alt) = anchor.ned_to_lla(&pm).unwrap_or((f64::NAN, f64::NAN, f64::NAN));
                 s.lat = lat;
                 s.lon = lon;
                 s.alt = alt;
@@ -653,11 +563,7 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
             s.label = label;
         }
         if baro_every > 0 && k % baro_every == baro_offset_rows {
-            let mut b = -p[2]
-                + ORIGIN.2
-                + baro_offset
-                + baro_gm.step(1.0 / sc.baro_rate.max(1e-3), &mut rng)
-                + 0.1 * rng.normal();
+            let mut b = -p[2] + ORIGIN.2 + baro_offset + baro_gm.step(1.0 / sc.baro_rate.max(1e-3), &mut rng) + 0.1 * rng.normal();
             for (i, ft) in sc.faults.iter().enumerate() {
                 if ft.kind == FaultKind::BaroStuck && t >= ft.start && t < ft.end {
                     b = *baro_hold[i].get_or_insert(b);
@@ -675,36 +581,12 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
 pub fn to_csv(sc: &Scenario, rows: &[Sample]) -> String {
     use core::fmt::Write;
     let cols: &[(&str, usize)] = &[
-        ("t", 6),
-        ("lat", 9),
-        ("lon", 9),
-        ("alt", 3),
-        ("vn", 3),
-        ("ve", 3),
-        ("vd", 3),
-        ("fix", 0),
-        ("sats", 0),
-        ("eph", 2),
-        ("epv", 2),
-        ("ax", 4),
-        ("ay", 4),
-        ("az", 4),
-        ("gx", 5),
-        ("gy", 5),
-        ("gz", 5),
-        ("qw", 7),
-        ("qx", 7),
-        ("qy", 7),
-        ("qz", 7),
-        ("baro", 3),
-        ("label", 0),
+        ("t", 6), ("lat", 9), ("lon", 9), ("alt", 3), ("vn", 3), ("ve", 3), ("vd", 3), ("fix", 0),
+        ("sats", 0), ("eph", 2), ("epv", 2), ("ax", 4), ("ay", 4), ("az", 4), ("gx", 5), ("gy", 5),
+        ("gz", 5), ("qw", 7), ("qx", 7), ("qy", 7), ("qz", 7), ("baro", 3), ("label", 0),
     ];
     let mut out = String::with_capacity(rows.len() * 160);
-    let _ = writeln!(
-        out,
-        "# navguard simulated scenario \"{}\" (seed {})",
-        sc.name, sc.seed
-    );
+    let _ = writeln!(out, "# navguard simulated scenario \"{}\" (seed {})", sc.name, sc.seed);
     if let Ok(j) = serde_json::to_string(sc) {
         let _ = writeln!(out, "# scenario: {j}");
     }
@@ -743,14 +625,8 @@ mod tests {
     #[test]
     fn silent_outage_has_no_fixes() {
         let rows = simulate(&Scenario::paper(OutageMode::Silent, 2)).unwrap();
-        assert!(rows
-            .iter()
-            .filter(|s| s.t >= 30.0 && s.t < 40.0)
-            .all(|s| !s.has_fix()));
-        assert!(rows
-            .iter()
-            .filter(|s| s.t >= 40.0 && s.t < 41.0)
-            .any(|s| s.has_fix()));
+        assert!(rows.iter().filter(|s| s.t >= 30.0 && s.t < 40.0).all(|s| !s.has_fix()));
+        assert!(rows.iter().filter(|s| s.t >= 40.0 && s.t < 41.0).any(|s| s.has_fix()));
     }
 
     #[test]
@@ -758,10 +634,7 @@ mod tests {
         let a = simulate(&Scenario::paper(OutageMode::Degraded, 7)).unwrap();
         let b = simulate(&Scenario::paper(OutageMode::Degraded, 7)).unwrap();
         let c = simulate(&Scenario::paper(OutageMode::Degraded, 8)).unwrap();
-        assert!(a
-            .iter()
-            .zip(&b)
-            .all(|(x, y)| x.lat.to_bits() == y.lat.to_bits() || x.lat.is_nan()));
+        assert!(a.iter().zip(&b).all(|(x, y)| x.lat.to_bits() == y.lat.to_bits() || x.lat.is_nan()));
         assert!(a.iter().zip(&c).any(|(x, y)| x.ax != y.ax));
     }
 
@@ -769,12 +642,7 @@ mod tests {
     fn hover_accelerometer_reads_minus_g_and_paper_profile_climbs_60m() {
         let rows = simulate(&Scenario::paper(OutageMode::Silent, 3)).unwrap();
         let anchor = Anchor::at(ORIGIN.0, ORIGIN.1, ORIGIN.2);
-        let at = |t: f64| {
-            rows.iter()
-                .find(|s| (s.t - t).abs() < 1e-9 && s.has_fix())
-                .map(|s| anchor.lla_to_ned(s.lat, s.lon, s.alt))
-                .unwrap()
-        };
+        let at = |t: f64| rows.iter().find(|s| (s.t - t).abs() < 1e-9 && s.has_fix()).map(|s| anchor.lla_to_ned(s.lat, s.lon, s.alt)).unwrap();
         // Climb of 1 m/s for ~57 s: about 57 m up (GPS error is a few m).
         assert_abs_diff_eq!(-at(70.0)[2], 57.0, epsilon = 6.0);
         // Level flight at 10 m/s heading north before the first turn.

@@ -40,23 +40,14 @@ pub struct Info {
 }
 
 fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
 fn header(bytes: &[u8]) -> Result<(Header<'_>, &[u8]), String> {
-    let (h, body) = postcard::take_from_bytes::<Header>(bytes).map_err(|e| {
-        format!(
-            "snapshot: not a navguard snapshot ({e}, {} bytes)",
-            bytes.len()
-        )
-    })?;
+    let (h, body) = postcard::take_from_bytes::<Header>(bytes)
+        .map_err(|e| format!("snapshot: not a navguard snapshot ({e}, {} bytes)", bytes.len()))?;
     if h.format != FORMAT {
-        return Err(format!(
-            "snapshot: format \"{}\" is not \"{FORMAT}\"",
-            h.format
-        ));
+        return Err(format!("snapshot: format \"{}\" is not \"{FORMAT}\"", h.format));
     }
     if h.version != VERSION {
         return Err(format!(
@@ -67,10 +58,7 @@ fn header(bytes: &[u8]) -> Result<(Header<'_>, &[u8]), String> {
         ));
     }
     if fnv1a(body) != h.checksum {
-        return Err(format!(
-            "snapshot: checksum mismatch ({} body bytes): the snapshot is damaged",
-            body.len()
-        ));
+        return Err(format!("snapshot: checksum mismatch ({} body bytes): the snapshot is damaged", body.len()));
     }
     Ok((h, body))
 }
@@ -78,23 +66,14 @@ fn header(bytes: &[u8]) -> Result<(Header<'_>, &[u8]), String> {
 /// Read a snapshot's header (and verify its checksum) without restoring it.
 pub fn info(bytes: &[u8]) -> Result<Info, String> {
     let (h, _) = header(bytes)?;
-    Ok(Info {
-        version: h.version,
-        crate_version: h.crate_version.to_string(),
-        bytes: bytes.len(),
-    })
+    Ok(Info { version: h.version, crate_version: h.crate_version.to_string(), bytes: bytes.len() })
 }
 
 impl Detector {
     /// The detector's whole state as bytes (see the module docs).
     pub fn snapshot(&self) -> Result<Vec<u8>, String> {
         let body = postcard::to_allocvec(self).map_err(|e| format!("snapshot: {e}"))?;
-        let h = Header {
-            format: FORMAT,
-            version: VERSION,
-            crate_version: env!("CARGO_PKG_VERSION"),
-            checksum: fnv1a(&body),
-        };
+        let h = Header { format: FORMAT, version: VERSION, crate_version: env!("CARGO_PKG_VERSION"), checksum: fnv1a(&body) };
         let mut out = postcard::to_allocvec(&h).map_err(|e| format!("snapshot: {e}"))?;
         out.extend_from_slice(&body);
         Ok(out)
@@ -104,13 +83,10 @@ impl Detector {
     /// exactly where the snapshotted one stood.
     pub fn restore(bytes: &[u8]) -> Result<Detector, String> {
         let (_, body) = header(bytes)?;
-        let (mut det, rest) = postcard::take_from_bytes::<Detector>(body)
-            .map_err(|e| format!("snapshot: body does not parse: {e}"))?;
+        let (mut det, rest) =
+            postcard::take_from_bytes::<Detector>(body).map_err(|e| format!("snapshot: body does not parse: {e}"))?;
         if !rest.is_empty() {
-            return Err(format!(
-                "snapshot: {} unexpected bytes after the body",
-                rest.len()
-            ));
+            return Err(format!("snapshot: {} unexpected bytes after the body", rest.len()));
         }
         det.check_restored().map_err(|e| format!("snapshot: {e}"))?;
         Ok(det)
@@ -126,9 +102,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn run(det: &mut Detector, rows: &[crate::Sample]) -> Vec<Output> {
-        rows.iter()
-            .map(|s| det.push(s).expect("simulated rows are valid"))
-            .collect()
+        rows.iter().map(|s| det.push(s).expect("simulated rows are valid")).collect()
     }
 
     /// Outputs compared bit for bit (NaN == NaN by bits).
@@ -137,18 +111,7 @@ mod tests {
             return Err(format!("{} vs {} outputs", a.len(), b.len()));
         }
         for (i, (x, y)) in a.iter().zip(b).enumerate() {
-            let bits = |o: &Output| {
-                (
-                    o.t.to_bits(),
-                    o.status,
-                    o.f.to_bits(),
-                    o.r.to_bits(),
-                    o.c.to_bits(),
-                    o.kind,
-                    o.gps_epoch,
-                    o.driver,
-                )
-            };
+            let bits = |o: &Output| (o.t.to_bits(), o.status, o.f.to_bits(), o.r.to_bits(), o.c.to_bits(), o.kind, o.gps_epoch, o.driver);
             if bits(x) != bits(y) {
                 return Err(format!("row {i}: {x:?} vs {y:?}"));
             }
@@ -176,10 +139,7 @@ mod tests {
         out.extend(run(&mut b, &rows[cut..]));
         same(&all, &out).unwrap();
         assert_eq!(b.stats(), whole.stats());
-        assert!(
-            whole.stats().retrains > 0,
-            "the scenario must exercise retraining"
-        );
+        assert!(whole.stats().retrains > 0, "the scenario must exercise retraining");
         assert_eq!(info(&snap).unwrap().version, VERSION);
     }
 
@@ -189,33 +149,20 @@ mod tests {
         let mut d = Detector::new(Config::default()).unwrap();
         run(&mut d, &rows[..2000]);
         let snap = d.snapshot().unwrap();
-        assert!(Detector::restore(&[])
-            .unwrap_err()
-            .contains("not a navguard snapshot"));
-        assert!(Detector::restore(b"hello world")
-            .unwrap_err()
-            .contains("snapshot"));
+        assert!(Detector::restore(&[]).unwrap_err().contains("not a navguard snapshot"));
+        assert!(Detector::restore(b"hello world").unwrap_err().contains("snapshot"));
         let mut bad = snap.clone();
         let n = bad.len();
         bad[n / 2] ^= 0x40;
         assert!(Detector::restore(&bad).unwrap_err().contains("checksum"));
-        assert!(Detector::restore(&snap[..n - 7])
-            .unwrap_err()
-            .contains("checksum"));
+        assert!(Detector::restore(&snap[..n - 7]).unwrap_err().contains("checksum"));
         // Another format version is refused by name.
         let (h, body) = header(&snap).unwrap();
-        let other = Header {
-            version: VERSION + 1,
-            ..h
-        };
+        let other = Header { version: VERSION + 1, ..h };
         let mut v2 = postcard::to_allocvec(&other).unwrap();
         v2.extend_from_slice(body);
         let e = Detector::restore(&v2).unwrap_err();
-        assert!(
-            e.contains(&format!("version {}", VERSION + 1))
-                && e.contains(&format!("reads version {VERSION}")),
-            "{e}"
-        );
+        assert!(e.contains(&format!("version {}", VERSION + 1)) && e.contains(&format!("reads version {VERSION}")), "{e}");
         // A forged body with a valid checksum: an out-of-range ring head is
         // caught by the shape check, not by a panic on the next push.
         let mut forged = d.clone();

@@ -200,11 +200,7 @@ pub fn fit_rms(residuals: &[f64], w: usize) -> Result<RmsThreshold, String> {
     check_residuals(residuals, w)?;
     let window_rms: Vec<f64> = residuals.chunks_exact(w).map(rms).collect();
     let mean_rms = window_rms.iter().sum::<f64>() / window_rms.len() as f64;
-    Ok(RmsThreshold {
-        w,
-        window_rms,
-        mean_rms,
-    })
+    Ok(RmsThreshold { w, window_rms, mean_rms })
 }
 
 // ---------------------------------------------------------------- Φ_ν
@@ -271,17 +267,8 @@ pub fn normality_model(residuals: &[f64], w: usize, psi: f64) -> Result<Normalit
         ));
     }
     let rho: Vec<f64> = (1..=n_ref).map(|r| r as f64 * psi).collect();
-    let sigma = rho
-        .iter()
-        .map(|&p| max_window_count(residuals, w, p))
-        .collect();
-    Ok(NormalityModel {
-        w,
-        psi,
-        chi,
-        rho,
-        sigma,
-    })
+    let sigma = rho.iter().map(|&p| max_window_count(residuals, w, p)).collect();
+    Ok(NormalityModel { w, psi, chi, rho, sigma })
 }
 
 // ---------------------------------------------------------------- KT
@@ -294,24 +281,13 @@ pub fn kneedle_convex_decreasing(x: &[f64], y: &[f64]) -> Result<usize, String> 
         return Err("kneedle: x is empty".into());
     }
     if x.len() != y.len() {
-        return Err(format!(
-            "kneedle: x has {} points, y has {}",
-            x.len(),
-            y.len()
-        ));
+        return Err(format!("kneedle: x has {} points, y has {}", x.len(), y.len()));
     }
     if let Some(i) = x.iter().chain(y).position(|v| !v.is_finite()) {
-        return Err(format!(
-            "kneedle: non-finite value at position {i} of x then y"
-        ));
+        return Err(format!("kneedle: non-finite value at position {i} of x then y"));
     }
     if let Some(i) = (1..x.len()).find(|&i| x[i] <= x[i - 1]) {
-        return Err(format!(
-            "kneedle: x[{i}] = {} not above x[{}] = {}",
-            x[i],
-            i - 1,
-            x[i - 1]
-        ));
+        return Err(format!("kneedle: x[{i}] = {} not above x[{}] = {}", x[i], i - 1, x[i - 1]));
     }
     if x.len() == 1 {
         return Ok(0);
@@ -323,11 +299,7 @@ pub fn kneedle_convex_decreasing(x: &[f64], y: &[f64]) -> Result<usize, String> 
     let mut best = (0usize, f64::NEG_INFINITY);
     for i in 0..x.len() {
         let xn = (x[i] - x0) / (x1 - x0);
-        let yn = if yspan > 0.0 {
-            (y[i] - ymin) / yspan
-        } else {
-            0.0
-        };
+        let yn = if yspan > 0.0 { (y[i] - ymin) / yspan } else { 0.0 };
         let d = 1.0 - xn - yn;
         if d > best.1 {
             best = (i, d);
@@ -351,12 +323,7 @@ pub fn fit_knee(residuals: &[f64], w: usize, psi: f64) -> Result<KneeThreshold, 
     let model = normality_model(residuals, w, psi)?;
     let ys: Vec<f64> = model.sigma.iter().map(|&s| s as f64).collect();
     let k = kneedle_convex_decreasing(&model.rho, &ys)?;
-    Ok(KneeThreshold {
-        rho: model.rho[k],
-        sigma: ys[k],
-        knee_index: k,
-        model,
-    })
+    Ok(KneeThreshold { rho: model.rho[k], sigma: ys[k], knee_index: k, model })
 }
 
 // ---------------------------------------------------------------- AT pieces
@@ -369,9 +336,7 @@ pub fn conditional_entropy(joint: [[f64; 2]; 2]) -> Result<f64, String> {
     for (x, row) in joint.iter().enumerate() {
         for (y, &v) in row.iter().enumerate() {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(format!(
-                    "conditional_entropy: joint[{x}][{y}] = {v}: must be finite and >= 0"
-                ));
+                return Err(format!("conditional_entropy: joint[{x}][{y}] = {v}: must be finite and >= 0"));
             }
             total += v;
         }
@@ -410,22 +375,13 @@ pub fn f_beta(tp: u64, fp: u64, fn_: u64, beta: f64) -> f64 {
 /// Ordinary least squares `y ≈ slope·x + intercept`.
 pub fn linear_regression(x: &[f64], y: &[f64]) -> Result<(f64, f64), String> {
     if x.len() != y.len() {
-        return Err(format!(
-            "linear_regression: x has {} points, y has {}",
-            x.len(),
-            y.len()
-        ));
+        return Err(format!("linear_regression: x has {} points, y has {}", x.len(), y.len()));
     }
     if x.len() < 2 {
-        return Err(format!(
-            "linear_regression: {} points, need at least 2",
-            x.len()
-        ));
+        return Err(format!("linear_regression: {} points, need at least 2", x.len()));
     }
     if let Some(i) = x.iter().chain(y).position(|v| !v.is_finite()) {
-        return Err(format!(
-            "linear_regression: non-finite value at position {i} of x then y"
-        ));
+        return Err(format!("linear_regression: non-finite value at position {i} of x then y"));
     }
     let n = x.len() as f64;
     let mx = x.iter().sum::<f64>() / n;
@@ -447,9 +403,7 @@ pub fn equilibrium(u: f64, a: f64, p: f64, c: f64, x_m: f64) -> Result<f64, Stri
         }
     }
     if u + p <= 1e-12 {
-        return Err(format!(
-            "equilibrium: u + p = {u} + {p} must be > 0 (U must fall or D rise with the offset)"
-        ));
+        return Err(format!("equilibrium: u + p = {u} + {p} must be > 0 (U must fall or D rise with the offset)"));
     }
     Ok((a + c + p * x_m) / (u + p))
 }
@@ -476,14 +430,7 @@ pub struct AdaptiveConfig {
 
 impl Default for AdaptiveConfig {
     fn default() -> Self {
-        AdaptiveConfig {
-            w: 100,
-            psi: 0.02,
-            probe_gain: 2.0,
-            probe_len: 10,
-            beta: 2.0,
-            u_floor: 0.01,
-        }
+        AdaptiveConfig { w: 100, psi: 0.02, probe_gain: 2.0, probe_len: 10, beta: 2.0, u_floor: 0.01 }
     }
 }
 
@@ -492,16 +439,10 @@ impl AdaptiveConfig {
         check_w(self.w)?;
         check_psi(self.psi)?;
         if !(self.probe_gain.is_finite() && self.probe_gain > 0.0) {
-            return Err(format!(
-                "probe_gain = {}: must be finite and > 0",
-                self.probe_gain
-            ));
+            return Err(format!("probe_gain = {}: must be finite and > 0", self.probe_gain));
         }
         if self.probe_len == 0 || self.probe_len > self.w {
-            return Err(format!(
-                "probe_len = {}: must be in 1..=w = {}",
-                self.probe_len, self.w
-            ));
+            return Err(format!("probe_len = {}: must be in 1..=w = {}", self.probe_len, self.w));
         }
         if !(self.beta.is_finite() && self.beta > 0.0) {
             return Err(format!("beta = {}: must be finite and > 0", self.beta));
@@ -570,12 +511,7 @@ fn probe(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<(Vec<f64>, Vec<bool>
 
 /// Run the two-stage evaluation offline; returns per sample
 /// (anomalous, fault) after backdating.
-pub fn two_stage_offline(
-    residuals: &[f64],
-    w: usize,
-    rho: f64,
-    sigma: f64,
-) -> Result<Vec<(bool, bool)>, String> {
+pub fn two_stage_offline(residuals: &[f64], w: usize, rho: f64, sigma: f64) -> Result<Vec<(bool, bool)>, String> {
     let mut core = TwoStage::new(w)?;
     let mut out: Vec<(bool, bool)> = Vec::with_capacity(residuals.len());
     for &r in residuals {
@@ -605,13 +541,8 @@ pub fn two_stage_offline(
 /// (at least 2, at most all).
 pub fn regression_points(unc: &[f64], u_floor: f64) -> usize {
     let n = unc.len();
-    let peak = unc
-        .iter()
-        .enumerate()
-        .fold(0, |b, (i, &v)| if v > unc[b] { i } else { b });
-    let end = (peak + 1..n)
-        .find(|&i| unc[i] <= u_floor)
-        .map_or(n, |i| i + 1);
+    let peak = unc.iter().enumerate().fold(0, |b, (i, &v)| if v > unc[b] { i } else { b });
+    let end = (peak + 1..n).find(|&i| unc[i] <= u_floor).map_or(n, |i| i + 1);
     end.max(2).min(n)
 }
 
@@ -749,11 +680,7 @@ impl ThresholdPool {
             .map_err(|e| format!("mode {k}: {e}"))?;
             modes.push(t);
         }
-        Ok(ThresholdPool {
-            method,
-            w: cfg.w,
-            modes,
-        })
+        Ok(ThresholdPool { method, w: cfg.w, modes })
     }
 
     /// Check a pool (e.g. one deserialised from JSON) before use.
@@ -764,29 +691,17 @@ impl ThresholdPool {
         }
         for (k, m) in self.modes.iter().enumerate() {
             if m.method() != self.method {
-                return Err(format!(
-                    "mode {k}: method {:?} in a {:?} pool",
-                    m.method(),
-                    self.method
-                ));
+                return Err(format!("mode {k}: method {:?} in a {:?} pool", m.method(), self.method));
             }
             if m.w() != self.w {
-                return Err(format!(
-                    "mode {k}: window w = {} in a pool with w = {}",
-                    m.w(),
-                    self.w
-                ));
+                return Err(format!("mode {k}: window w = {} in a pool with w = {}", m.w(), self.w));
             }
             let (rho, sigma) = m.pair();
             if !(rho.is_finite() && rho >= 0.0) {
-                return Err(format!(
-                    "mode {k}: threshold rho = {rho}: must be finite and >= 0"
-                ));
+                return Err(format!("mode {k}: threshold rho = {rho}: must be finite and >= 0"));
             }
             if self.method != Method::Rt && !(sigma.is_finite() && sigma >= 0.0) {
-                return Err(format!(
-                    "mode {k}: upper boundary sigma = {sigma}: must be finite and >= 0"
-                ));
+                return Err(format!("mode {k}: upper boundary sigma = {sigma}: must be finite and >= 0"));
             }
         }
         Ok(())
@@ -807,12 +722,7 @@ impl SpeedBands {
             return Err(format!("edges[{i}] = {}: must be finite", edges[i]));
         }
         if let Some(i) = (1..edges.len()).find(|&i| edges[i] <= edges[i - 1]) {
-            return Err(format!(
-                "edges[{i}] = {}: not above edges[{}] = {}",
-                edges[i],
-                i - 1,
-                edges[i - 1]
-            ));
+            return Err(format!("edges[{i}] = {}: not above edges[{}] = {}", edges[i], i - 1, edges[i - 1]));
         }
         Ok(SpeedBands { edges })
     }
@@ -933,12 +843,7 @@ impl Evaluator {
     pub fn new(pool: ThresholdPool) -> Result<Self, String> {
         pool.check()?;
         let core = TwoStage::new(pool.w)?;
-        Ok(Evaluator {
-            pool,
-            core,
-            sumsq: 0.0,
-            since_refresh: 0,
-        })
+        Ok(Evaluator { pool, core, sumsq: 0.0, since_refresh: 0 })
     }
 
     pub fn pool(&self) -> &ThresholdPool {
@@ -951,14 +856,7 @@ impl Evaluator {
         self.pool.check()?;
         let c = &self.core;
         let w = self.pool.w;
-        if c.w != w
-            || c.r.len() != w
-            || c.anomalous.len() != w
-            || c.confirmed.len() != w
-            || c.head >= w
-            || c.len > w
-            || c.count > w
-        {
+        if c.w != w || c.r.len() != w || c.anomalous.len() != w || c.confirmed.len() != w || c.head >= w || c.len > w || c.count > w {
             return Err(format!("threshold evaluator: window {} / buffers {} / head {} / len {} / count {} inconsistent with w = {w}", c.w, c.r.len(), c.head, c.len, c.count));
         }
         Ok(())
@@ -1009,11 +907,7 @@ impl Evaluator {
                     self.sumsq = c.r[..c.len].iter().map(|v| v * v).sum();
                     self.since_refresh = 0;
                 }
-                Ok(if libm::fabs(residual) > thr {
-                    Verdict::Fault { backdate: 0 }
-                } else {
-                    Verdict::Normal
-                })
+                Ok(if libm::fabs(residual) > thr { Verdict::Fault { backdate: 0 } } else { Verdict::Normal })
             }
         }
     }
@@ -1039,25 +933,14 @@ mod tests {
 
     #[test]
     fn rt_stream_uses_previous_window_rms() {
-        let pool = ThresholdPool::fit(
-            Method::Rt,
-            &[&[1.0, 1.0, 1.0, 1.0]],
-            &AdaptiveConfig {
-                w: 2,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let pool = ThresholdPool::fit(Method::Rt, &[&[1.0, 1.0, 1.0, 1.0]], &AdaptiveConfig { w: 2, ..Default::default() })
+            .unwrap();
         let mut ev = Evaluator::new(pool).unwrap();
         // Warm-up: mean RMS 1.
         assert_eq!(ev.push(0.5, 0).unwrap(), Verdict::Normal);
         assert_eq!(ev.push(1.5, 0).unwrap(), Verdict::Fault { backdate: 0 });
         // Now RMS of [0.5, 1.5] = sqrt(1.25) ≈ 1.118.
-        assert_relative_eq!(
-            ev.rms_threshold(0).unwrap(),
-            1.25f64.sqrt(),
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(ev.rms_threshold(0).unwrap(), 1.25f64.sqrt(), epsilon = 1e-12);
         assert_eq!(ev.push(1.1, 0).unwrap(), Verdict::Normal);
         // RMS of [1.5, 1.1] = sqrt((2.25+1.21)/2) = sqrt(1.73) ≈ 1.315.
         assert_eq!(ev.push(1.3, 0).unwrap(), Verdict::Normal);
@@ -1079,40 +962,24 @@ mod tests {
     #[test]
     fn kneedle_by_hand() {
         // x̃ = 0 .25 .5 .75 1, ỹ = 1 .4 .2 .1 0 -> 1-x̃-ỹ = 0 .35 .3 .15 0.
-        let k = kneedle_convex_decreasing(&[0.0, 1.0, 2.0, 3.0, 4.0], &[10.0, 4.0, 2.0, 1.0, 0.0])
-            .unwrap();
+        let k = kneedle_convex_decreasing(&[0.0, 1.0, 2.0, 3.0, 4.0], &[10.0, 4.0, 2.0, 1.0, 0.0]).unwrap();
         assert_eq!(k, 1);
         // Straight line: all differences 0 -> first point.
-        assert_eq!(
-            kneedle_convex_decreasing(&[0.0, 1.0, 2.0], &[2.0, 1.0, 0.0]).unwrap(),
-            0
-        );
-        assert!(kneedle_convex_decreasing(&[0.0, 0.0], &[1.0, 0.0])
-            .unwrap_err()
-            .contains("x[1]"));
+        assert_eq!(kneedle_convex_decreasing(&[0.0, 1.0, 2.0], &[2.0, 1.0, 0.0]).unwrap(), 0);
+        assert!(kneedle_convex_decreasing(&[0.0, 0.0], &[1.0, 0.0]).unwrap_err().contains("x[1]"));
         assert!(kneedle_convex_decreasing(&[], &[]).is_err());
     }
 
     #[test]
     fn conditional_entropy_by_hand() {
         // p(x=0)=.5 with Y|x=0 pure; p(x=1)=.5 with Y|x=1 = (1/2,1/2): H = .5 bit.
-        assert_relative_eq!(
-            conditional_entropy([[4.0, 0.0], [2.0, 2.0]]).unwrap(),
-            0.5,
-            epsilon = 1e-15
-        );
+        assert_relative_eq!(conditional_entropy([[4.0, 0.0], [2.0, 2.0]]).unwrap(), 0.5, epsilon = 1e-15);
         // Y|x=1 = (1/4, 3/4), p(x=1) = 1: H = h2(1/4) = 0.811278...
         let h = -(0.25 * 0.25f64.log2() + 0.75 * 0.75f64.log2());
-        assert_relative_eq!(
-            conditional_entropy([[0.0, 0.0], [1.0, 3.0]]).unwrap(),
-            h,
-            epsilon = 1e-15
-        );
+        assert_relative_eq!(conditional_entropy([[0.0, 0.0], [1.0, 3.0]]).unwrap(), h, epsilon = 1e-15);
         assert_relative_eq!(h, 0.8112781244591328, epsilon = 1e-15);
         assert!(conditional_entropy([[0.0; 2]; 2]).is_err());
-        assert!(conditional_entropy([[f64::NAN, 0.0], [1.0, 0.0]])
-            .unwrap_err()
-            .contains("joint[0][0]"));
+        assert!(conditional_entropy([[f64::NAN, 0.0], [1.0, 0.0]]).unwrap_err().contains("joint[0][0]"));
     }
 
     #[test]
@@ -1134,21 +1001,11 @@ mod tests {
         assert_relative_eq!(s, 0.8, epsilon = 1e-12);
         assert_relative_eq!(i, 1.3, epsilon = 1e-12);
         // u=.2, a=1, p=.05, c=.3, x_m=10: (1+.3+.5)/.25 = 7.2
-        assert_relative_eq!(
-            equilibrium(0.2, 1.0, 0.05, 0.3, 10.0).unwrap(),
-            7.2,
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(equilibrium(0.2, 1.0, 0.05, 0.3, 10.0).unwrap(), 7.2, epsilon = 1e-12);
         // It is the root of U(x) + D(x_m - x).
         let x = 7.2;
-        assert_relative_eq!(
-            (-0.2 * x + 1.0) + (0.05 * (10.0 - x) + 0.3),
-            0.0,
-            epsilon = 1e-12
-        );
-        assert!(equilibrium(0.0, 1.0, 0.0, 0.0, 5.0)
-            .unwrap_err()
-            .contains("u + p"));
+        assert_relative_eq!((-0.2 * x + 1.0) + (0.05 * (10.0 - x) + 0.3), 0.0, epsilon = 1e-12);
+        assert!(equilibrium(0.0, 1.0, 0.0, 0.0, 5.0).unwrap_err().contains("u + p"));
         assert!(linear_regression(&[1.0, 1.0], &[0.0, 1.0]).is_err());
     }
 
@@ -1165,8 +1022,8 @@ mod tests {
                 Normal,
                 Anomaly,
                 Normal,
-                Anomaly,               // count 2 <= 2
-                Fault { backdate: 3 }, // count 3: backdates to t=1
+                Anomaly,                   // count 2 <= 2
+                Fault { backdate: 3 },     // count 3: backdates to t=1
                 Normal,
                 Normal,
                 Normal,
@@ -1176,35 +1033,17 @@ mod tests {
         );
         let off = two_stage_offline(&r, 4, 1.0, 2.0).unwrap();
         let faults: Vec<bool> = off.iter().map(|o| o.1).collect();
-        assert_eq!(
-            faults,
-            vec![false, true, false, true, true, false, false, false, false, false]
-        );
+        assert_eq!(faults, vec![false, true, false, true, true, false, false, false, false, false]);
     }
 
     #[test]
     fn mode_change_recounts_window() {
         let mut modes = Vec::new();
         for rho in [1.0, 3.0] {
-            let model = NormalityModel {
-                w: 3,
-                psi: 1.0,
-                chi: 3.0,
-                rho: vec![rho],
-                sigma: vec![1],
-            };
-            modes.push(ModeThreshold::Kt(KneeThreshold {
-                model,
-                knee_index: 0,
-                rho,
-                sigma: 1.0,
-            }));
+            let model = NormalityModel { w: 3, psi: 1.0, chi: 3.0, rho: vec![rho], sigma: vec![1] };
+            modes.push(ModeThreshold::Kt(KneeThreshold { model, knee_index: 0, rho, sigma: 1.0 }));
         }
-        let pool = ThresholdPool {
-            method: Method::Kt,
-            w: 3,
-            modes,
-        };
+        let pool = ThresholdPool { method: Method::Kt, w: 3, modes };
         let mut ev = Evaluator::new(pool).unwrap();
         assert_eq!(ev.push(2.0, 0).unwrap(), Verdict::Anomaly);
         // Mode 1 (ρ = 3): the 2.0 no longer counts, so this one is only an anomaly.
@@ -1219,25 +1058,12 @@ mod tests {
     fn bad_inputs_are_errors() {
         assert!(fit_rms(&[], 10).unwrap_err().contains("residuals"));
         assert!(fit_rms(&[1.0], 0).unwrap_err().contains("w = 0"));
-        assert!(fit_rms(&[1.0, f64::NAN], 1)
-            .unwrap_err()
-            .contains("residuals[1]"));
-        assert!(normality_model(&[0.1; 10], 5, 0.0)
-            .unwrap_err()
-            .contains("psi"));
-        assert!(normality_model(&[0.1; 10], 5, 1.0)
-            .unwrap_err()
-            .contains("psi"));
-        assert!(normality_model(&[0.1; 10], 5, f64::NAN)
-            .unwrap_err()
-            .contains("psi"));
-        let bad = AdaptiveConfig {
-            probe_len: 0,
-            ..Default::default()
-        };
-        assert!(fit_adaptive(&[0.1; 200], &bad)
-            .unwrap_err()
-            .contains("probe_len"));
+        assert!(fit_rms(&[1.0, f64::NAN], 1).unwrap_err().contains("residuals[1]"));
+        assert!(normality_model(&[0.1; 10], 5, 0.0).unwrap_err().contains("psi"));
+        assert!(normality_model(&[0.1; 10], 5, 1.0).unwrap_err().contains("psi"));
+        assert!(normality_model(&[0.1; 10], 5, f64::NAN).unwrap_err().contains("psi"));
+        let bad = AdaptiveConfig { probe_len: 0, ..Default::default() };
+        assert!(fit_adaptive(&[0.1; 200], &bad).unwrap_err().contains("probe_len"));
         assert!(ThresholdPool::fit(Method::At, &[], &AdaptiveConfig::default()).is_err());
         assert!(SpeedBands::new(vec![1.0, 0.5]).is_err());
         let b = SpeedBands::around(&[0.7, 1.0, 1.3, 1.6]).unwrap();
@@ -1246,15 +1072,7 @@ mod tests {
         assert_eq!(b.mode_of(1.0).unwrap(), 1);
         assert_eq!(b.mode_of(1.6).unwrap(), 3);
         assert!(b.mode_of(f64::NAN).is_err());
-        let mut pool = ThresholdPool::fit(
-            Method::Rt,
-            &[&[1.0; 4]],
-            &AdaptiveConfig {
-                w: 2,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let mut pool = ThresholdPool::fit(Method::Rt, &[&[1.0; 4]], &AdaptiveConfig { w: 2, ..Default::default() }).unwrap();
         pool.w = 0;
         assert!(Evaluator::new(pool).unwrap_err().contains("w = 0"));
     }
@@ -1268,27 +1086,18 @@ mod tests {
     fn adaptive_fit_on_gaussian_residuals() {
         let r = noisy(2000, 7);
         let at = fit_adaptive(&r, &AdaptiveConfig::default()).unwrap();
-        assert!(
-            at.u > 0.0 && at.p > 0.0,
-            "slopes u = {}, p = {}",
-            at.u,
-            at.p
-        );
+        assert!(at.u > 0.0 && at.p > 0.0, "slopes u = {}, p = {}", at.u, at.p);
         assert!(at.x_star >= 1.0 && at.x_star <= at.x_m);
         assert_relative_eq!(at.rho, 0.02 * at.x_star, epsilon = 1e-15);
         // σ_ν is the exact maximum at ρ_ν: the training data raises no fault.
         let v = two_stage_offline(&r, 100, at.rho, at.sigma).unwrap();
         assert!(v.iter().all(|o| !o.1));
         let kt = fit_knee(&r, 100, 0.02).unwrap();
-        assert!(two_stage_offline(&r, 100, kt.rho, kt.sigma)
-            .unwrap()
-            .iter()
-            .all(|o| !o.1));
+        assert!(two_stage_offline(&r, 100, kt.rho, kt.sigma).unwrap().iter().all(|o| !o.1));
         // Round trip through JSON.
         let pool = ThresholdPool::fit(Method::At, &[&r], &AdaptiveConfig::default()).unwrap();
         // (serde_json's default float parsing may differ in the last bit.)
-        let back: ThresholdPool =
-            serde_json::from_str(&serde_json::to_string(&pool).unwrap()).unwrap();
+        let back: ThresholdPool = serde_json::from_str(&serde_json::to_string(&pool).unwrap()).unwrap();
         let (ModeThreshold::At(a), ModeThreshold::At(b)) = (&pool.modes[0], &back.modes[0]) else {
             panic!("method changed in the round trip")
         };
@@ -1301,20 +1110,12 @@ mod tests {
     #[test]
     fn usage_example_from_the_docs() -> Result<(), String> {
         let (normal_07, normal_10) = (noisy(1000, 1), noisy(1000, 2));
-        let pool = ThresholdPool::fit(
-            Method::At,
-            &[&normal_07[..], &normal_10[..]],
-            &AdaptiveConfig::default(),
-        )?;
+        let pool = ThresholdPool::fit(Method::At, &[&normal_07[..], &normal_10[..]], &AdaptiveConfig::default())?;
         let bands = SpeedBands::around(&[0.7, 1.0])?;
         let mut ev = Evaluator::new(pool)?;
         let mut faults = 0;
         for k in 0..300 {
-            let residual = if (150..170).contains(&k) {
-                1.0
-            } else {
-                normal_07[k]
-            };
+            let residual = if (150..170).contains(&k) { 1.0 } else { normal_07[k] };
             faults += ev.push(residual, bands.mode_of(0.72)?)?.is_fault() as usize;
         }
         assert!((15..=20).contains(&faults), "{faults}");
@@ -1324,10 +1125,7 @@ mod tests {
     #[test]
     fn regression_points_stop_where_uncertainty_vanishes() {
         // Peak at index 1, first value <= 0.01 after it at index 4 -> m = 5.
-        assert_eq!(
-            regression_points(&[0.5, 1.0, 0.4, 0.2, 0.0, 0.3, 0.0], 0.01),
-            5
-        );
+        assert_eq!(regression_points(&[0.5, 1.0, 0.4, 0.2, 0.0, 0.3, 0.0], 0.01), 5);
         // Never falls below the floor -> all points.
         assert_eq!(regression_points(&[1.0, 0.5, 0.4], 0.01), 3);
         // At least two points for a line.

@@ -128,10 +128,7 @@ fn mul3(a: &M3, b: &M3) -> M3 {
 
 /// Matrix exponential by scaling and squaring with a 20-term Taylor series.
 fn expm3(m: &M3) -> M3 {
-    let norm = m
-        .iter()
-        .map(|r| r.iter().map(|v| v.abs()).sum::<f64>())
-        .fold(0.0, f64::max);
+    let norm = m.iter().map(|r| r.iter().map(|v| v.abs()).sum::<f64>()).fold(0.0, f64::max);
     let mut s = 0;
     let mut scale = 1.0;
     while norm * scale > 0.25 && s < 200 {
@@ -206,10 +203,7 @@ impl JackalParams {
         self.check()?;
         let v = speed / self.wheel_radius / self.dc_gain();
         if !(speed.is_finite() && speed > 0.0) || v > self.va_max {
-            return Err(format!(
-                "speed = {speed}: must be in (0, {:.3}] m/s",
-                self.va_max * self.dc_gain() * self.wheel_radius
-            ));
+            return Err(format!("speed = {speed}: must be in (0, {:.3}] m/s", self.va_max * self.dc_gain() * self.wheel_radius));
         }
         Ok(v)
     }
@@ -218,23 +212,14 @@ impl JackalParams {
     pub fn discretise(&self) -> Result<Discrete, String> {
         self.check()?;
         let (a, b, dt) = (self.a(), self.b(), self.dt);
-        let m: M3 = [
-            [a[0][0] * dt, a[0][1] * dt, b[0] * dt],
-            [a[1][0] * dt, a[1][1] * dt, b[1] * dt],
-            [0.0, 0.0, 0.0],
-        ];
+        let m: M3 = [[a[0][0] * dt, a[0][1] * dt, b[0] * dt], [a[1][0] * dt, a[1][1] * dt, b[1] * dt], [0.0, 0.0, 0.0]];
         let e = expm3(&m);
         let d = Discrete {
             phi: [[e[0][0], e[0][1]], [e[1][0], e[1][1]]],
             gamma: [e[0][2], e[1][2]],
             h: [0.0, self.wheel_radius],
         };
-        if d.phi
-            .iter()
-            .flatten()
-            .chain(&d.gamma)
-            .any(|v| !v.is_finite())
-        {
+        if d.phi.iter().flatten().chain(&d.gamma).any(|v| !v.is_finite()) {
             return Err(format!("discretise: non-finite result for dt = {dt}"));
         }
         Ok(d)
@@ -254,18 +239,8 @@ pub struct KalmanFilter {
 impl KalmanFilter {
     /// `q_current`, `q_speed`: process noise variances of i_a (A²) and ω_v
     /// ((rad/s)²); `r_meas`: encoder noise variance ((m/s)²).
-    pub fn new(
-        d: Discrete,
-        q_current: f64,
-        q_speed: f64,
-        r_meas: f64,
-        x0: [f64; 2],
-    ) -> Result<Self, String> {
-        for (name, v) in [
-            ("q_current", q_current),
-            ("q_speed", q_speed),
-            ("r_meas", r_meas),
-        ] {
+    pub fn new(d: Discrete, q_current: f64, q_speed: f64, r_meas: f64, x0: [f64; 2]) -> Result<Self, String> {
+        for (name, v) in [("q_current", q_current), ("q_speed", q_speed), ("r_meas", r_meas)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} = {v}: must be finite and >= 0"));
             }
@@ -273,13 +248,7 @@ impl KalmanFilter {
         if r_meas == 0.0 {
             return Err("r_meas = 0: must be > 0".into());
         }
-        Ok(KalmanFilter {
-            d,
-            q: [[q_current, 0.0], [0.0, q_speed]],
-            r: r_meas,
-            x: x0,
-            p: [[1.0, 0.0], [0.0, 1.0]],
-        })
+        Ok(KalmanFilter { d, q: [[q_current, 0.0], [0.0, q_speed]], r: r_meas, x: x0, p: [[1.0, 0.0], [0.0, 1.0]] })
     }
 
     /// Speed estimate, m/s.
@@ -291,28 +260,18 @@ impl KalmanFilter {
     /// the residual (innovation) `y − H x̂⁻`.
     pub fn step(&mut self, u: f64, y: f64) -> f64 {
         let (f, g, h) = (self.d.phi, self.d.gamma, self.d.h);
-        let x = [
-            f[0][0] * self.x[0] + f[0][1] * self.x[1] + g[0] * u,
-            f[1][0] * self.x[0] + f[1][1] * self.x[1] + g[1] * u,
-        ];
+        let x = [f[0][0] * self.x[0] + f[0][1] * self.x[1] + g[0] * u, f[1][0] * self.x[0] + f[1][1] * self.x[1] + g[1] * u];
         // P⁻ = F P Fᵀ + Q
-        let fp: [[f64; 2]; 2] = core::array::from_fn(|i| {
-            core::array::from_fn(|j| f[i][0] * self.p[0][j] + f[i][1] * self.p[1][j])
-        });
-        let p: [[f64; 2]; 2] = core::array::from_fn(|i| {
-            core::array::from_fn(|j| fp[i][0] * f[j][0] + fp[i][1] * f[j][1] + self.q[i][j])
-        });
+        let fp: [[f64; 2]; 2] = core::array::from_fn(|i| core::array::from_fn(|j| f[i][0] * self.p[0][j] + f[i][1] * self.p[1][j]));
+        let p: [[f64; 2]; 2] =
+            core::array::from_fn(|i| core::array::from_fn(|j| fp[i][0] * f[j][0] + fp[i][1] * f[j][1] + self.q[i][j]));
         let resid = y - (h[0] * x[0] + h[1] * x[1]);
-        let ph = [
-            p[0][0] * h[0] + p[0][1] * h[1],
-            p[1][0] * h[0] + p[1][1] * h[1],
-        ];
+        let ph = [p[0][0] * h[0] + p[0][1] * h[1], p[1][0] * h[0] + p[1][1] * h[1]];
         let s = h[0] * ph[0] + h[1] * ph[1] + self.r;
         let k = [ph[0] / s, ph[1] / s];
         self.x = [x[0] + k[0] * resid, x[1] + k[1] * resid];
         // Joseph-free form is fine here: P = (I − K H) P⁻, symmetrised.
-        let mut pn: [[f64; 2]; 2] =
-            core::array::from_fn(|i| core::array::from_fn(|j| p[i][j] - k[i] * ph[j]));
+        let mut pn: [[f64; 2]; 2] = core::array::from_fn(|i| core::array::from_fn(|j| p[i][j] - k[i] * ph[j]));
         let off = 0.5 * (pn[0][1] + pn[1][0]);
         pn[0][1] = off;
         pn[1][0] = off;
@@ -368,17 +327,8 @@ impl TrainStats {
         let abs: Vec<f64> = residuals.iter().map(|r| r.abs()).collect();
         let n = abs.len() as f64;
         let mean_abs = abs.iter().sum::<f64>() / n;
-        let std_abs = libm::sqrt(
-            abs.iter()
-                .map(|a| (a - mean_abs) * (a - mean_abs))
-                .sum::<f64>()
-                / n,
-        );
-        Ok(TrainStats {
-            abs,
-            mean_abs,
-            std_abs,
-        })
+        let std_abs = libm::sqrt(abs.iter().map(|a| (a - mean_abs) * (a - mean_abs)).sum::<f64>() / n);
+        Ok(TrainStats { abs, mean_abs, std_abs })
     }
 }
 
@@ -422,27 +372,17 @@ pub fn draw_occurrences(
     }
     let need = w + count * (len + w);
     if len == 0 || need > n {
-        return Err(format!(
-            "test_len = {n}: too short for {count} faults of {len} samples {w} apart after {w}"
-        ));
+        return Err(format!("test_len = {n}: too short for {count} faults of {len} samples {w} apart after {w}"));
     }
     // Place in a compressed axis and spread out: sorted gaps (stars and bars).
     let free = n - need;
-    let mut cuts: Vec<usize> = (0..count)
-        .map(|_| (rng.uniform() * (free + 1) as f64) as usize)
-        .collect();
+    let mut cuts: Vec<usize> = (0..count).map(|_| (rng.uniform() * (free + 1) as f64) as usize).collect();
     cuts.sort_unstable();
     let mut out = Vec::with_capacity(count);
     for (k, c) in cuts.into_iter().enumerate() {
         let start = w + c + k * (len + w);
         let mu_r = stats.abs[(rng.uniform() * stats.abs.len() as f64) as usize % stats.abs.len()];
-        out.push(Occurrence {
-            start,
-            len,
-            kind,
-            eta,
-            mu_r,
-        });
+        out.push(Occurrence { start, len, kind, eta, mu_r });
     }
     Ok(out)
 }
@@ -465,12 +405,7 @@ pub struct NoiseModel {
 
 /// The paper's Table 1 RT column (mean RMS of the training residual per
 /// speed), which our noise is calibrated to.
-pub const PAPER_RMS: [(f64, f64); 4] = [
-    (0.7, 0.078927),
-    (1.0, 0.080349),
-    (1.3, 0.092686),
-    (1.6, 0.142931),
-];
+pub const PAPER_RMS: [(f64, f64); 4] = [(0.7, 0.078927), (1.0, 0.080349), (1.3, 0.092686), (1.6, 0.142931)];
 
 /// Core (Gaussian) encoder noise per unit of target RMS; the rest of the
 /// RMS comes from rare glitches. Calibrated offline (see `docs/baek-jo.md`)
@@ -482,31 +417,19 @@ const GLITCH_PROB: f64 = 0.003;
 
 impl NoiseModel {
     pub fn check(&self) -> Result<(), String> {
-        for (name, v) in [
-            ("encoder_std", self.encoder_std),
-            ("disturbance_std", self.disturbance_std),
-        ] {
+        for (name, v) in [("encoder_std", self.encoder_std), ("disturbance_std", self.disturbance_std)] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(format!("{name} = {v}: must be finite and >= 0"));
             }
         }
         if !(self.disturbance_tau.is_finite() && self.disturbance_tau > 0.0) {
-            return Err(format!(
-                "disturbance_tau = {}: must be finite and > 0",
-                self.disturbance_tau
-            ));
+            return Err(format!("disturbance_tau = {}: must be finite and > 0", self.disturbance_tau));
         }
         if !(0.0..=1.0).contains(&self.burst_prob) {
-            return Err(format!(
-                "burst_prob = {}: must be in [0, 1]",
-                self.burst_prob
-            ));
+            return Err(format!("burst_prob = {}: must be in [0, 1]", self.burst_prob));
         }
         if !self.burst_gain.iter().all(|g| g.is_finite()) || self.burst_max_len == 0 {
-            return Err(format!(
-                "burst_gain = {:?}, burst_max_len = {}: finite gains, length >= 1",
-                self.burst_gain, self.burst_max_len
-            ));
+            return Err(format!("burst_gain = {:?}, burst_max_len = {}: finite gains, length >= 1", self.burst_gain, self.burst_max_len));
         }
         Ok(())
     }
@@ -590,10 +513,8 @@ pub fn simulate(
         ];
         dist = a * dist + drive * rng.normal();
         if burst_left == 0 && rng.uniform() < noise.burst_prob {
-            burst_left =
-                1 + (rng.uniform() * noise.burst_max_len as f64) as usize % noise.burst_max_len;
-            let g =
-                noise.burst_gain[0] + (noise.burst_gain[1] - noise.burst_gain[0]) * rng.uniform();
+            burst_left = 1 + (rng.uniform() * noise.burst_max_len as f64) as usize % noise.burst_max_len;
+            let g = noise.burst_gain[0] + (noise.burst_gain[1] - noise.burst_gain[0]) * rng.uniform();
             burst = if rng.uniform() < 0.5 { -g } else { g } * noise.encoder_std;
         }
         let mut y = d.h[1] * x[1] + dist + noise.encoder_std * rng.normal();
@@ -789,38 +710,10 @@ pub const PAPER_TABLE1: [PaperTable1Row; 4] = [
 /// Baek & Jo's Table 2: per speed, per fault type (constant, random, noise),
 /// (FNR, FPR) of AT, KT, RT.
 pub const PAPER_TABLE2: [PaperTable2Row; 4] = [
-    (
-        0.7,
-        [
-            [(0.401, 0.0), (0.456, 0.0), (0.664, 0.636)],
-            [(0.210, 0.0), (0.245, 0.0), (0.515, 0.640)],
-            [(0.000, 0.0), (0.114, 0.0), (0.195, 0.646)],
-        ],
-    ),
-    (
-        1.0,
-        [
-            [(0.078, 0.0), (0.422, 0.0), (0.861, 0.690)],
-            [(0.121, 0.0), (0.278, 0.0), (0.515, 0.648)],
-            [(0.0, 0.001), (0.001, 0.0), (0.240, 0.644)],
-        ],
-    ),
-    (
-        1.3,
-        [
-            [(0.260, 0.0), (0.438, 0.278), (0.785, 0.650)],
-            [(0.195, 0.001), (0.416, 0.278), (0.515, 0.649)],
-            [(0.001, 0.0), (0.306, 0.245), (0.276, 0.647)],
-        ],
-    ),
-    (
-        1.6,
-        [
-            [(0.026, 0.0), (0.285, 0.0), (0.709, 0.632)],
-            [(0.018, 0.0), (0.192, 0.0), (0.539, 0.635)],
-            [(0.0, 0.0), (0.014, 0.0), (0.367, 0.642)],
-        ],
-    ),
+    (0.7, [[(0.401, 0.0), (0.456, 0.0), (0.664, 0.636)], [(0.210, 0.0), (0.245, 0.0), (0.515, 0.640)], [(0.000, 0.0), (0.114, 0.0), (0.195, 0.646)]]),
+    (1.0, [[(0.078, 0.0), (0.422, 0.0), (0.861, 0.690)], [(0.121, 0.0), (0.278, 0.0), (0.515, 0.648)], [(0.0, 0.001), (0.001, 0.0), (0.240, 0.644)]]),
+    (1.3, [[(0.260, 0.0), (0.438, 0.278), (0.785, 0.650)], [(0.195, 0.001), (0.416, 0.278), (0.515, 0.649)], [(0.001, 0.0), (0.306, 0.245), (0.276, 0.647)]]),
+    (1.6, [[(0.026, 0.0), (0.285, 0.0), (0.709, 0.632)], [(0.018, 0.0), (0.192, 0.0), (0.539, 0.635)], [(0.0, 0.0), (0.014, 0.0), (0.367, 0.642)]]),
 ];
 
 fn paper_row(speed: f64) -> Option<usize> {
@@ -845,22 +738,13 @@ impl EvalConfig {
             return Err("speeds: empty".into());
         }
         if self.durations.is_empty() || self.durations.contains(&0) {
-            return Err(format!(
-                "durations = {:?}: need at least one, all > 0",
-                self.durations
-            ));
+            return Err(format!("durations = {:?}: need at least one, all > 0", self.durations));
         }
         if self.reps == 0 || self.occurrences == 0 {
-            return Err(format!(
-                "reps = {}, occurrences = {}: must be > 0",
-                self.reps, self.occurrences
-            ));
+            return Err(format!("reps = {}, occurrences = {}: must be > 0", self.reps, self.occurrences));
         }
         if self.train_len < self.fit.w {
-            return Err(format!(
-                "train_len = {}: shorter than w = {}",
-                self.train_len, self.fit.w
-            ));
+            return Err(format!("train_len = {}: shorter than w = {}", self.train_len, self.fit.w));
         }
         let longest = self.durations.iter().max().copied().unwrap_or(0);
         let w = self.fit.w;
@@ -880,15 +764,7 @@ pub fn fit_pools(cfg: &EvalConfig) -> Result<(Vec<TrainStats>, [ThresholdPool; 3
     let mut train = Vec::with_capacity(cfg.speeds.len());
     for (k, &v) in cfg.speeds.iter().enumerate() {
         let noise = NoiseModel::for_speed(v)?;
-        let run = simulate(
-            &cfg.params,
-            v,
-            cfg.train_len,
-            &noise,
-            &[],
-            None,
-            mix(cfg.seed, &[0xA, k as u64]),
-        )?;
+        let run = simulate(&cfg.params, v, cfg.train_len, &noise, &[], None, mix(cfg.seed, &[0xA, k as u64]))?;
         train.push(run.residuals);
     }
     let refs: Vec<&[f64]> = train.iter().map(|t| t.as_slice()).collect();
@@ -897,10 +773,7 @@ pub fn fit_pools(cfg: &EvalConfig) -> Result<(Vec<TrainStats>, [ThresholdPool; 3
         ThresholdPool::fit(Method::Kt, &refs, &cfg.fit)?,
         ThresholdPool::fit(Method::Rt, &refs, &cfg.fit)?,
     ];
-    let stats = train
-        .iter()
-        .map(|t| TrainStats::new(t))
-        .collect::<Result<Vec<_>, _>>()?;
+    let stats = train.iter().map(|t| TrainStats::new(t)).collect::<Result<Vec<_>, _>>()?;
     Ok((stats, pools))
 }
 
@@ -935,11 +808,7 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Report, String> {
             at_detectability: at.detectability.clone(),
         });
     }
-    let mut evs = [
-        Evaluator::new(pools[0].clone())?,
-        Evaluator::new(pools[1].clone())?,
-        Evaluator::new(pools[2].clone())?,
-    ];
+    let mut evs = [Evaluator::new(pools[0].clone())?, Evaluator::new(pools[1].clone())?, Evaluator::new(pools[2].clone())?];
     let mut table2 = Vec::new();
     for (k, &v) in cfg.speeds.iter().enumerate() {
         let noise = NoiseModel::for_speed(v)?;
@@ -950,30 +819,10 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Report, String> {
                 for (di, &dur) in cfg.durations.iter().enumerate() {
                     let mut counts = [Counts::default(); 3];
                     for rep in 0..cfg.reps {
-                        let s = mix(
-                            cfg.seed,
-                            &[0xB, k as u64, fi as u64, ei as u64, di as u64, rep as u64],
-                        );
+                        let s = mix(cfg.seed, &[0xB, k as u64, fi as u64, ei as u64, di as u64, rep as u64]);
                         let mut rng = Rng::new(s);
-                        let occ = draw_occurrences(
-                            &mut rng,
-                            cfg.test_len,
-                            cfg.fit.w,
-                            cfg.occurrences,
-                            dur,
-                            ft,
-                            eta,
-                            &stats[k],
-                        )?;
-                        let run = simulate(
-                            &cfg.params,
-                            v,
-                            cfg.test_len,
-                            &noise,
-                            &occ,
-                            Some(&stats[k]),
-                            rng.next_u64(),
-                        )?;
+                        let occ = draw_occurrences(&mut rng, cfg.test_len, cfg.fit.w, cfg.occurrences, dur, ft, eta, &stats[k])?;
+                        let run = simulate(&cfg.params, v, cfg.test_len, &noise, &occ, Some(&stats[k]), rng.next_u64())?;
                         for (m, ev) in evs.iter_mut().enumerate() {
                             counts[m].add(&score(ev, k, &run)?);
                         }
@@ -987,27 +836,13 @@ pub fn evaluate(cfg: &EvalConfig) -> Result<Report, String> {
                 }
             }
             let n = cells as f64;
-            let ours = core::array::from_fn(|m| Rates {
-                fnr: sums[m][0] / n,
-                fpr: sums[m][1] / n,
-                fpr_conventional: sums[m][2] / n,
-            });
+            let ours = core::array::from_fn(|m| Rates { fnr: sums[m][0] / n, fpr: sums[m][1] / n, fpr_conventional: sums[m][2] / n });
             let paper = paper_row(v).map(|i| PAPER_TABLE2[i].1[fi]);
-            table2.push(Table2Row {
-                speed: v,
-                fault: ft,
-                ours,
-                paper,
-            });
+            table2.push(Table2Row { speed: v, fault: ft, ours, paper });
         }
     }
     let ordering = ordering(&table2);
-    Ok(Report {
-        config: cfg.clone(),
-        table1,
-        table2,
-        ordering,
-    })
+    Ok(Report { config: cfg.clone(), table1, table2, ordering })
 }
 
 fn ordered(x: [f64; 3]) -> bool {
@@ -1059,10 +894,7 @@ mod tests {
         let va = p.voltage_for(1.0).unwrap();
         let mut x = [0.0, 0.0];
         for _ in 0..50 {
-            x = [
-                d.phi[0][0] * x[0] + d.phi[0][1] * x[1] + d.gamma[0] * va,
-                d.phi[1][0] * x[0] + d.phi[1][1] * x[1] + d.gamma[1] * va,
-            ];
+            x = [d.phi[0][0] * x[0] + d.phi[0][1] * x[1] + d.gamma[0] * va, d.phi[1][0] * x[0] + d.phi[1][1] * x[1] + d.gamma[1] * va];
         }
         assert_relative_eq!(d.h[1] * x[1], 1.0, epsilon = 1e-9);
         assert!(p.voltage_for(3.0).unwrap_err().contains("speed"));
@@ -1096,8 +928,7 @@ mod tests {
         let stats = TrainStats::new(&[0.1, -0.3, 0.2]).unwrap();
         assert_relative_eq!(stats.mean_abs, 0.2, epsilon = 1e-15);
         let mut rng = Rng::new(1);
-        let occ =
-            draw_occurrences(&mut rng, 1000, 100, 3, 50, FaultType::Constant, 2.0, &stats).unwrap();
+        let occ = draw_occurrences(&mut rng, 1000, 100, 3, 50, FaultType::Constant, 2.0, &stats).unwrap();
         assert_eq!(occ.len(), 3);
         assert!(occ[0].start >= 100);
         for p in occ.windows(2) {
@@ -1107,19 +938,12 @@ mod tests {
         // Constant: μ = μ_r + μ_r·η.
         let o = &occ[0];
         assert_relative_eq!(o.offset(&stats, &mut rng), o.mu_r * 3.0);
-        assert!(
-            draw_occurrences(&mut rng, 400, 100, 3, 50, FaultType::Noise, 1.0, &stats).is_err()
-        );
+        assert!(draw_occurrences(&mut rng, 400, 100, 3, 50, FaultType::Noise, 1.0, &stats).is_err());
     }
 
     #[test]
     fn counts_rates() {
-        let c = Counts {
-            tp: 3,
-            fp: 1,
-            r#fn: 1,
-            tn: 5,
-        };
+        let c = Counts { tp: 3, fp: 1, r#fn: 1, tn: 5 };
         assert_relative_eq!(c.fnr(), 0.25);
         assert_relative_eq!(c.fpr(), 0.25);
         assert_relative_eq!(c.fpr_conventional(), 1.0 / 6.0);

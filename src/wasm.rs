@@ -39,16 +39,10 @@ fn config_from(v: &JsValue) -> Result<Config, JsError> {
         ConfigInput::check_field_name(&name).map_err(err)?;
         // Field by field, so a type error names its field.
         let one = Object::new();
-        set(
-            &one,
-            &name,
-            &Reflect::get(v, &k).unwrap_or(JsValue::UNDEFINED),
-        );
-        serde_wasm_bindgen::from_value::<ConfigInput>(one.into())
-            .map_err(|e| err(format!("config.{name}: {e}")))?;
+        set(&one, &name, &Reflect::get(v, &k).unwrap_or(JsValue::UNDEFINED));
+        serde_wasm_bindgen::from_value::<ConfigInput>(one.into()).map_err(|e| err(format!("config.{name}: {e}")))?;
     }
-    let input: ConfigInput =
-        serde_wasm_bindgen::from_value(v.clone()).map_err(|e| err(format!("config: {e}")))?;
+    let input: ConfigInput = serde_wasm_bindgen::from_value(v.clone()).map_err(|e| err(format!("config: {e}")))?;
     input.check().map_err(err)
 }
 
@@ -68,6 +62,7 @@ fn output_object(o: &Output) -> JsValue {
     set(&obj, "gpsEpoch", &o.gps_epoch.into());
     obj.into()
 }
+
 
 #[wasm_bindgen(typescript_custom_section)]
 const TS_TYPES: &'static str = r#"
@@ -159,25 +154,16 @@ pub struct Detector {
 impl Detector {
     /// `new Detector(config)`: every field optional; unknown fields throw.
     #[wasm_bindgen(constructor)]
-    pub fn new(
-        #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,
-    ) -> Result<Detector, JsError> {
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Detector, JsError> {
         let cfg = config_from(&config)?;
         let inner = CoreDetector::new(cfg).map_err(err)?;
-        Ok(Detector {
-            inner,
-            cols: vec![Vec::new(); COLUMNS.len()],
-            rows: Vec::new(),
-        })
+        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new() })
     }
 
     /// Push one sample (plain object keyed by CSV column names).
     /// Returns `{ t, status, f, r, c, kind, gpsEpoch }`.
     #[wasm_bindgen(unchecked_return_type = "PushResult")]
-    pub fn push(
-        &mut self,
-        #[wasm_bindgen(unchecked_param_type = "NavSample")] sample: &JsValue,
-    ) -> Result<JsValue, JsError> {
+    pub fn push(&mut self, #[wasm_bindgen(unchecked_param_type = "NavSample")] sample: &JsValue) -> Result<JsValue, JsError> {
         let row = self.inner.stats().rows;
         if !sample.is_object() {
             return Err(err(format!("row {row}: sample must be a plain object")));
@@ -213,11 +199,7 @@ impl Detector {
     #[wasm_bindgen(js_name = pushRow, unchecked_return_type = "PushResult")]
     pub fn push_row(&mut self, row: &[f64]) -> Result<JsValue, JsError> {
         if row.len() != COLUMNS.len() {
-            return Err(err(format!(
-                "pushRow: expected {} values, got {}",
-                COLUMNS.len(),
-                row.len()
-            )));
+            return Err(err(format!("pushRow: expected {} values, got {}", COLUMNS.len(), row.len())));
         }
         let mut s = Sample::default();
         for (i, v) in row.iter().enumerate() {
@@ -233,27 +215,14 @@ impl Detector {
     #[wasm_bindgen(js_name = pushRowInto)]
     pub fn push_row_into(&mut self, row: &[f64], out: &mut [f64]) -> Result<(), JsError> {
         if row.len() != COLUMNS.len() || out.len() < 7 {
-            return Err(err(format!(
-                "pushRowInto: expected {} values and an output of 7, got {} and {}",
-                COLUMNS.len(),
-                row.len(),
-                out.len()
-            )));
+            return Err(err(format!("pushRowInto: expected {} values and an output of 7, got {} and {}", COLUMNS.len(), row.len(), out.len())));
         }
         let mut s = Sample::default();
         for (i, v) in row.iter().enumerate() {
             s.set(i, *v);
         }
         let o = self.inner.push(&s).map_err(err)?;
-        out[..7].copy_from_slice(&[
-            o.t,
-            o.status as f64,
-            o.f,
-            o.r,
-            o.c,
-            o.kind as f64,
-            if o.gps_epoch { 1.0 } else { 0.0 },
-        ]);
+        out[..7].copy_from_slice(&[o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }]);
         Ok(())
     }
 
@@ -268,14 +237,9 @@ impl Detector {
     /// changes nothing. Returns `{ status: Uint8Array, f, r, c: Float64Array,
     /// kind: Uint8Array }`, one entry per row.
     #[wasm_bindgen(js_name = pushColumns, unchecked_return_type = "ColumnsResult")]
-    pub fn push_columns(
-        &mut self,
-        #[wasm_bindgen(unchecked_param_type = "NavColumns")] columns: &JsValue,
-    ) -> Result<JsValue, JsError> {
+    pub fn push_columns(&mut self, #[wasm_bindgen(unchecked_param_type = "NavColumns")] columns: &JsValue) -> Result<JsValue, JsError> {
         if !columns.is_object() {
-            return Err(err(
-                "pushColumns: argument must be an object of Float64Arrays",
-            ));
+            return Err(err("pushColumns: argument must be an object of Float64Arrays"));
         }
         let mut present = [false; COLUMNS.len()];
         let mut n: Option<usize> = None;
@@ -322,20 +286,12 @@ impl Detector {
         }
         let c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| &self.cols[i][..n]);
         self.rows.clear();
-        self.rows
-            .extend((0..n).map(|j| Sample::from_columns(&c, j)));
+        self.rows.extend((0..n).map(|j| Sample::from_columns(&c, j)));
         let mut last_t = f64::NEG_INFINITY;
         for (j, s) in self.rows.iter().enumerate() {
-            self.inner
-                .validate(s, base + j as u64)
-                .map_err(|e| err(format!("{e} (batch index {j})")))?;
+            self.inner.validate(s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
             if s.t < last_t {
-                return Err(err(format!(
-                    "row {}: field 't': time goes backwards: {} after {} (batch index {j})",
-                    base + j as u64,
-                    s.t,
-                    last_t
-                )));
+                return Err(err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, s.t, last_t)));
             }
             last_t = s.t;
         }
@@ -386,11 +342,7 @@ impl Detector {
     /// or one of another format version.
     pub fn restore(snapshot: &[u8]) -> Result<Detector, JsError> {
         let inner = CoreDetector::restore(snapshot).map_err(err)?;
-        Ok(Detector {
-            inner,
-            cols: vec![Vec::new(); COLUMNS.len()],
-            rows: Vec::new(),
-        })
+        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new() })
     }
 }
 
@@ -429,10 +381,7 @@ fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue
 /// Audit a whole log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised
 /// by content). Returns `{ report, columns: { t, status, f, r, c, kind, rPn..rBaro } }`.
 #[wasm_bindgen(js_name = auditBytes, unchecked_return_type = "AuditResult")]
-pub fn audit_bytes(
-    bytes: &[u8],
-    #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,
-) -> Result<JsValue, JsError> {
+pub fn audit_bytes(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
     let cfg = config_from(&config)?;
     let log = logs::read_any(bytes).map_err(err)?;
     let (report, cols) = audit::audit(&log, &cfg).map_err(err)?;
@@ -451,18 +400,12 @@ pub struct Auditor {
 #[wasm_bindgen]
 impl Auditor {
     #[wasm_bindgen(constructor)]
-    pub fn new(
-        bytes: &[u8],
-        #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,
-    ) -> Result<Auditor, JsError> {
+    pub fn new(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Auditor, JsError> {
         let cfg = config_from(&config)?;
         let log = logs::read_any(bytes).map_err(err)?;
         let rows = log.samples.len();
         let run = audit::AuditRun::new(log, &cfg).map_err(err)?;
-        Ok(Auditor {
-            run: Some(run),
-            rows,
-        })
+        Ok(Auditor { run: Some(run), rows })
     }
 
     /// Rows in the log.
@@ -474,11 +417,7 @@ impl Auditor {
     pub fn step(&mut self, rows: f64) -> f64 {
         match self.run.as_mut() {
             Some(r) => {
-                r.step(if rows.is_finite() && rows > 0.0 {
-                    rows as usize
-                } else {
-                    1
-                });
+                r.step(if rows.is_finite() && rows > 0.0 { rows as usize } else { 1 });
                 r.progress()
             }
             None => 1.0,
@@ -488,10 +427,7 @@ impl Auditor {
     /// Finish (processing what is left) and return `{ report, columns }`.
     #[wasm_bindgen(unchecked_return_type = "AuditResult")]
     pub fn finish(&mut self) -> Result<JsValue, JsError> {
-        let run = self
-            .run
-            .take()
-            .ok_or_else(|| err("Auditor.finish: already finished"))?;
+        let run = self.run.take().ok_or_else(|| err("Auditor.finish: already finished"))?;
         let (report, cols) = run.finish();
         audit_result(&report, &cols)
     }
@@ -514,26 +450,19 @@ impl StreamAuditor {
         #[wasm_bindgen(js_name = keepOutputs)] keep_outputs: Option<bool>,
     ) -> Result<StreamAuditor, JsError> {
         let cfg = config_from(&config)?;
-        Ok(StreamAuditor {
-            run: Some(audit::StreamAudit::new(&cfg, keep_outputs.unwrap_or(false)).map_err(err)?),
-        })
+        Ok(StreamAuditor { run: Some(audit::StreamAudit::new(&cfg, keep_outputs.unwrap_or(false)).map_err(err)?) })
     }
 
     /// Feed the next chunk (any split); returns the rows it completed.
     pub fn feed(&mut self, chunk: &[u8]) -> Result<f64, JsError> {
-        let run = self
-            .run
-            .as_mut()
-            .ok_or_else(|| err("StreamAuditor.feed: already finished"))?;
+        let run = self.run.as_mut().ok_or_else(|| err("StreamAuditor.feed: already finished"))?;
         Ok(run.feed(chunk).map_err(err)? as f64)
     }
 
     /// Per-row outputs `{ t, status, f, r, c, kind, rPn..rBaro }` of the latest chunk.
     #[wasm_bindgen(unchecked_return_type = "AuditResult['columns']")]
     pub fn outputs(&self) -> JsValue {
-        self.run
-            .as_ref()
-            .map_or(JsValue::UNDEFINED, |r| columns_object(r.outputs()))
+        self.run.as_ref().map_or(JsValue::UNDEFINED, |r| columns_object(r.outputs()))
     }
 
     /// Rows audited so far.
@@ -550,10 +479,7 @@ impl StreamAuditor {
     /// of a last unterminated line, if any.
     #[wasm_bindgen(unchecked_return_type = "AuditResult")]
     pub fn finish(&mut self) -> Result<JsValue, JsError> {
-        let run = self
-            .run
-            .take()
-            .ok_or_else(|| err("StreamAuditor.finish: already finished"))?;
+        let run = self.run.take().ok_or_else(|| err("StreamAuditor.finish: already finished"))?;
         let (report, cols) = run.finish().map_err(err)?;
         audit_result(&report, &cols)
     }
@@ -583,80 +509,48 @@ struct CompareOptions {
 #[wasm_bindgen]
 impl CompareRun {
     #[wasm_bindgen(constructor)]
-    pub fn new(
-        #[wasm_bindgen(
-            unchecked_param_type = "{ seeds?: number; methods?: string[] } | undefined"
-        )]
-        options: JsValue,
-    ) -> Result<CompareRun, JsError> {
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "{ seeds?: number; methods?: string[] } | undefined")] options: JsValue) -> Result<CompareRun, JsError> {
         let o: CompareOptions = if options.is_undefined() || options.is_null() {
-            CompareOptions {
-                seeds: None,
-                methods: None,
-            }
+            CompareOptions { seeds: None, methods: None }
         } else {
-            serde_wasm_bindgen::from_value(options)
-                .map_err(|e| err(format!("compare options: {e}")))?
+            serde_wasm_bindgen::from_value(options).map_err(|e| err(format!("compare options: {e}")))?
         };
         let n = o.seeds.unwrap_or(5.0);
         if !(n.is_finite() && n.fract() == 0.0 && (1.0..=100.0).contains(&n)) {
-            return Err(err(format!(
-                "compare options.seeds: must be an integer in 1..=100, got {n}"
-            )));
+            return Err(err(format!("compare options.seeds: must be an integer in 1..=100, got {n}")));
         }
         let seeds: Vec<u64> = (1..=n as u64).collect();
         let methods = o
             .methods
             .unwrap_or_default()
             .iter()
-            .map(|m| {
-                crate::methods::Method::parse(m)
-                    .map_err(|e| e.replace("config.method", "compare options.methods"))
-            })
+            .map(|m| crate::methods::Method::parse(m).map_err(|e| e.replace("config.method", "compare options.methods")))
             .collect::<Result<Vec<_>, _>>()
             .map_err(err)?;
-        Ok(CompareRun {
-            run: Some(
-                crate::compare::CompareRun::new(&seeds, &methods, Some(js_clock)).map_err(err)?,
-            ),
-        })
+        Ok(CompareRun { run: Some(crate::compare::CompareRun::new(&seeds, &methods, Some(js_clock)).map_err(err)?) })
     }
 
     /// Add a real log (any supported format) under `name`.
     #[wasm_bindgen(js_name = addLog)]
     pub fn add_log(&mut self, name: &str, bytes: &[u8]) -> Result<(), JsError> {
         let log = logs::read_any(bytes).map_err(|e| err(format!("{name}: {e}")))?;
-        self.run
-            .as_mut()
-            .ok_or_else(|| err("CompareRun: already finished"))?
-            .add_log(name, log);
+        self.run.as_mut().ok_or_else(|| err("CompareRun: already finished"))?.add_log(name, log);
         Ok(())
     }
 
     /// Run one (flight, method) pair; returns the fraction done.
     pub fn step(&mut self) -> Result<f64, JsError> {
-        self.run
-            .as_mut()
-            .ok_or_else(|| err("CompareRun: already finished"))?
-            .step()
-            .map_err(err)
+        self.run.as_mut().ok_or_else(|| err("CompareRun: already finished"))?.step().map_err(err)
     }
 
     /// `{ comparison, markdown }` (runs what is left first).
     #[wasm_bindgen(unchecked_return_type = "{ comparison: object; markdown: string }")]
     pub fn finish(&mut self) -> Result<JsValue, JsError> {
-        let run = self
-            .run
-            .take()
-            .ok_or_else(|| err("CompareRun: already finished"))?;
+        let run = self.run.take().ok_or_else(|| err("CompareRun: already finished"))?;
         let c = run.finish().map_err(err)?;
         let out = Object::new();
         let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
-        set(
-            &out,
-            "comparison",
-            &serde::Serialize::serialize(&c, &ser).map_err(err)?,
-        );
+        set(&out, "comparison", &serde::Serialize::serialize(&c, &ser).map_err(err)?);
         set(&out, "markdown", &crate::compare::markdown(&c).into());
         Ok(out.into())
     }
@@ -675,27 +569,19 @@ pub struct TightDetectorJs {
 impl TightDetectorJs {
     /// `new TightDetector(config)`: every field optional (see `docs/tight.md`).
     #[wasm_bindgen(constructor)]
-    pub fn new(
-        #[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue,
-    ) -> Result<TightDetectorJs, JsError> {
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue) -> Result<TightDetectorJs, JsError> {
         let cfg: crate::tight::stream::TightConfig = if config.is_undefined() || config.is_null() {
             Default::default()
         } else {
             serde_wasm_bindgen::from_value(config).map_err(|e| err(format!("tight config: {e}")))?
         };
-        Ok(TightDetectorJs {
-            inner: crate::tight::stream::TightDetector::new(cfg).map_err(err)?,
-        })
+        Ok(TightDetectorJs { inner: crate::tight::stream::TightDetector::new(cfg).map_err(err)? })
     }
 
     /// One epoch row; returns `{ t, status, faulty_prn, statistic, lambda_max, rdpop, action, n_sats, position_ned, ... }`.
     #[wasm_bindgen(unchecked_return_type = "TightOutput")]
-    pub fn push(
-        &mut self,
-        #[wasm_bindgen(unchecked_param_type = "TightRow")] row: JsValue,
-    ) -> Result<JsValue, JsError> {
-        let row: crate::tight::stream::EpochRow =
-            serde_wasm_bindgen::from_value(row).map_err(|e| err(format!("tight row: {e}")))?;
+    pub fn push(&mut self, #[wasm_bindgen(unchecked_param_type = "TightRow")] row: JsValue) -> Result<JsValue, JsError> {
+        let row: crate::tight::stream::EpochRow = serde_wasm_bindgen::from_value(row).map_err(|e| err(format!("tight row: {e}")))?;
         let out = self.inner.push(&row).map_err(err)?;
         serde_wasm_bindgen::to_value(&out).map_err(err)
     }
@@ -703,19 +589,14 @@ impl TightDetectorJs {
     /// GAN-FDSR with a model from `tightGanTrain` (its `model` bytes) instead
     /// of the embedded one; `config` as for the constructor.
     #[wasm_bindgen(js_name = withGanModel)]
-    pub fn with_gan_model(
-        #[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue,
-        model: &[u8],
-    ) -> Result<TightDetectorJs, JsError> {
+    pub fn with_gan_model(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue, model: &[u8]) -> Result<TightDetectorJs, JsError> {
         let cfg: crate::tight::stream::TightConfig = if config.is_undefined() || config.is_null() {
             Default::default()
         } else {
             serde_wasm_bindgen::from_value(config).map_err(|e| err(format!("tight config: {e}")))?
         };
         let model = crate::tight::gan_fdsr::GanDetectorModel::from_bytes(model).map_err(err)?;
-        Ok(TightDetectorJs {
-            inner: crate::tight::stream::TightDetector::with_gan(cfg, model).map_err(err)?,
-        })
+        Ok(TightDetectorJs { inner: crate::tight::stream::TightDetector::with_gan(cfg, model).map_err(err)? })
     }
 
     /// Every row of a pseudo-range CSV (`pr_<prn>` or `sat_id` layout); an array of outputs.
@@ -734,18 +615,11 @@ impl TightDetectorJs {
 #[wasm_bindgen(js_name = tightSimulate, unchecked_return_type = "{ csv: string; config: object; faultyPrn: number; faultStart: number; faultEnd: number }")]
 pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, JsError> {
     use crate::tight::fdi::{FdsrConfig, Strategy};
-    use crate::tight::scenario::{
-        environments, run_with_rows, FaultSpec, FaultType, RunSpec, SimConfig, World,
-    };
+    use crate::tight::scenario::{environments, run_with_rows, FaultSpec, FaultType, RunSpec, SimConfig, World};
     let cfg = SimConfig::default();
     let world = World::new(&cfg).map_err(err)?;
     let envs = environments(&world, &cfg).map_err(err)?;
-    let e = envs.get((env as usize).wrapping_sub(1)).ok_or_else(|| {
-        err(format!(
-            "tightSimulate: env must be 1..={}, got {env}",
-            envs.len()
-        ))
-    })?;
+    let e = envs.get((env as usize).wrapping_sub(1)).ok_or_else(|| err(format!("tightSimulate: env must be 1..={}, got {env}", envs.len())))?;
     let kind = match fault_type {
         0 => None,
         1 => Some(FaultType::Step20),
@@ -753,51 +627,27 @@ pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, J
         3 => Some(FaultType::Ramp1),
         4 => Some(FaultType::Ramp05),
         5 => Some(FaultType::Ramp03),
-        k => {
-            return Err(err(format!(
-                "tightSimulate: fault type must be 0..=5, got {k}"
-            )))
-        }
+        k => return Err(err(format!("tightSimulate: fault type must be 0..=5, got {k}"))),
     };
     if !(seed.is_finite() && seed >= 0.0) {
-        return Err(err(format!(
-            "tightSimulate: seed must be a non-negative number, got {seed}"
-        )));
+        return Err(err(format!("tightSimulate: seed must be a non-negative number, got {seed}")));
     }
-    let fault = kind.map(|kind| FaultSpec {
-        prn: e.faulty_prn,
-        kind,
-        start: e.fault_start,
-        end: e.fault_end,
-    });
+    let fault = kind.map(|kind| FaultSpec { prn: e.faulty_prn, kind, start: e.fault_start, end: e.fault_end });
     let spec = RunSpec {
         world: &world,
         cfg: &cfg,
         prns: &e.prns,
         watch_prn: e.faulty_prn,
         fault,
-        fdsr: FdsrConfig {
-            strategy: Strategy::Fdi,
-            alpha: 0.001,
-            eta: 0.035,
-        },
+        fdsr: FdsrConfig { strategy: Strategy::Fdi, alpha: 0.001, eta: 0.035 },
         seed: seed as u64,
         gan: None,
     };
     let (_, rows, init) = run_with_rows(&spec).map_err(err)?;
-    let tc = crate::tight::stream::TightConfig {
-        t0: world.t0,
-        strategy: Strategy::Fdi,
-        initial: Some(init),
-        ..Default::default()
-    };
+    let tc = crate::tight::stream::TightConfig { t0: world.t0, strategy: Strategy::Fdi, initial: Some(init), ..Default::default() };
     let out = Object::new();
     set(&out, "csv", &crate::tight::stream::to_csv(&rows).into());
-    set(
-        &out,
-        "config",
-        &serde_wasm_bindgen::to_value(&tc).map_err(err)?,
-    );
+    set(&out, "config", &serde_wasm_bindgen::to_value(&tc).map_err(err)?);
     set(&out, "faultyPrn", &JsValue::from(e.faulty_prn));
     set(&out, "faultStart", &JsValue::from(e.fault_start));
     set(&out, "faultEnd", &JsValue::from(e.fault_end));
@@ -812,8 +662,7 @@ pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, J
 #[wasm_bindgen(js_name = tightGanTrain, unchecked_return_type = "GanTrainResult")]
 pub fn tight_gan_train(
     #[wasm_bindgen(unchecked_param_type = "GanTrainOptions | undefined")] options: JsValue,
-    #[wasm_bindgen(unchecked_param_type = "((p: GanTrainProgress) => boolean | void) | undefined")]
-    on_progress: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "((p: GanTrainProgress) => boolean | void) | undefined")] on_progress: JsValue,
 ) -> Result<JsValue, JsError> {
     use crate::tight::gan_fdsr::{train_detector, GanTrainOptions};
     use crate::tight::scenario::{environments, SimConfig, World};
@@ -823,21 +672,14 @@ pub fn tight_gan_train(
     opts.calib_seeds = vec![201, 202];
     opts.gan.epochs = 5;
     if !(options.is_undefined() || options.is_null()) {
-        let get = |k: &str| {
-            js_sys::Reflect::get(&options, &JsValue::from_str(k)).unwrap_or(JsValue::UNDEFINED)
-        };
+        let get = |k: &str| js_sys::Reflect::get(&options, &JsValue::from_str(k)).unwrap_or(JsValue::UNDEFINED);
         let seeds = |k: &str| -> Result<Option<Vec<u64>>, JsError> {
             let v = get(k);
             if v.is_undefined() {
                 return Ok(None);
             }
-            let arr: Vec<f64> = serde_wasm_bindgen::from_value(v)
-                .map_err(|e| err(format!("tightGanTrain: {k}: {e}")))?;
-            if arr.is_empty()
-                || arr
-                    .iter()
-                    .any(|x| !(x.is_finite() && *x >= 0.0 && x.fract() == 0.0))
-            {
+            let arr: Vec<f64> = serde_wasm_bindgen::from_value(v).map_err(|e| err(format!("tightGanTrain: {k}: {e}")))?;
+            if arr.is_empty() || arr.iter().any(|x| !(x.is_finite() && *x >= 0.0 && x.fract() == 0.0)) {
                 return Err(err(format!("tightGanTrain: {k} must be a non-empty array of non-negative integers, got {arr:?}")));
             }
             Ok(Some(arr.into_iter().map(|x| x as u64).collect()))
@@ -848,43 +690,26 @@ pub fn tight_gan_train(
         if let Some(s) = seeds("calibSeeds")? {
             opts.calib_seeds = s;
         }
-        for (k, slot, lo, hi) in [
-            ("epochs", &mut opts.gan.epochs, 1usize, 1000usize),
-            ("hidden", &mut opts.gan.hidden, 1, 128),
-            ("window", &mut opts.gan.window, 2, 200),
-        ] {
+        for (k, slot, lo, hi) in [("epochs", &mut opts.gan.epochs, 1usize, 1000usize), ("hidden", &mut opts.gan.hidden, 1, 128), ("window", &mut opts.gan.window, 2, 200)] {
             let v = get(k);
             if v.is_undefined() {
                 continue;
             }
             match v.as_f64() {
-                Some(x) if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => {
-                    *slot = x as usize
-                }
-                _ => {
-                    return Err(err(format!(
-                        "tightGanTrain: {k} must be an integer in {lo}..={hi}, got {v:?}"
-                    )))
-                }
+                Some(x) if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => *slot = x as usize,
+                _ => return Err(err(format!("tightGanTrain: {k} must be an integer in {lo}..={hi}, got {v:?}"))),
             }
         }
         let a = get("alpha");
         if !a.is_undefined() {
-            opts.alpha = a
-                .as_f64()
-                .filter(|x| *x > 0.0 && *x < 1.0)
-                .ok_or_else(|| err(format!("tightGanTrain: alpha must be in (0, 1), got {a:?}")))?;
+            opts.alpha = a.as_f64().filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| err(format!("tightGanTrain: alpha must be in (0, 1), got {a:?}")))?;
         }
     }
     let cb = on_progress.dyn_ref::<js_sys::Function>().cloned();
     let sim = SimConfig::default();
     let world = World::new(&sim).map_err(err)?;
     let envs = environments(&world, &sim).map_err(err)?;
-    let prns = envs
-        .first()
-        .ok_or_else(|| err("tightGanTrain: no environment"))?
-        .prns
-        .clone();
+    let prns = envs.first().ok_or_else(|| err("tightGanTrain: no environment"))?.prns.clone();
     let (model, report) = train_detector(&world, &sim, &prns, &opts, &mut |p| {
         let Some(f) = cb.as_ref() else { return true };
         let o = Object::new();
@@ -903,40 +728,16 @@ pub fn tight_gan_train(
     .map_err(err)?;
     let bytes = model.to_bytes().map_err(err)?;
     let out = Object::new();
-    set(
-        &out,
-        "model",
-        &js_sys::Uint8Array::from(bytes.as_slice()).into(),
-    );
+    set(&out, "model", &js_sys::Uint8Array::from(bytes.as_slice()).into());
     set(&out, "tau", &JsValue::from(report.tau as f64));
     set(&out, "m", &JsValue::from(report.m as f64));
     set(&out, "lambda", &JsValue::from(model.gan.lambda()));
     set(&out, "t2", &JsValue::from(model.gan.t2()));
-    set(
-        &out,
-        "falseAlarm",
-        &JsValue::from(report.threshold.false_alarm),
-    );
-    set(
-        &out,
-        "trainWindows",
-        &JsValue::from(report.train_windows as f64),
-    );
-    set(
-        &out,
-        "calibWindows",
-        &JsValue::from(report.calib_windows as f64),
-    );
-    set(
-        &out,
-        "parameters",
-        &JsValue::from(model.gan.param_count() as f64),
-    );
-    set(
-        &out,
-        "table1",
-        &crate::tight::chaos::table1_markdown(&report.chaos).into(),
-    );
+    set(&out, "falseAlarm", &JsValue::from(report.threshold.false_alarm));
+    set(&out, "trainWindows", &JsValue::from(report.train_windows as f64));
+    set(&out, "calibWindows", &JsValue::from(report.calib_windows as f64));
+    set(&out, "parameters", &JsValue::from(model.gan.param_count() as f64));
+    set(&out, "table1", &crate::tight::chaos::table1_markdown(&report.chaos).into());
     Ok(out.into())
 }
 
@@ -960,26 +761,10 @@ pub fn read_log(bytes: &[u8]) -> Result<JsValue, JsError> {
     set(&out, "rows", &(log.samples.len() as f64).into());
     set(&out, "columns", &cols.into());
     let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
-    set(
-        &out,
-        "warnings",
-        &serde::Serialize::serialize(&log.warnings, &ser).map_err(err)?,
-    );
-    set(
-        &out,
-        "missing",
-        &serde::Serialize::serialize(&log.missing, &ser).map_err(err)?,
-    );
-    set(
-        &out,
-        "meta",
-        &serde::Serialize::serialize(&log.meta, &ser).map_err(err)?,
-    );
-    set(
-        &out,
-        "topicCounts",
-        &serde::Serialize::serialize(&log.topic_counts, &ser).map_err(err)?,
-    );
+    set(&out, "warnings", &serde::Serialize::serialize(&log.warnings, &ser).map_err(err)?);
+    set(&out, "missing", &serde::Serialize::serialize(&log.missing, &ser).map_err(err)?);
+    set(&out, "meta", &serde::Serialize::serialize(&log.meta, &ser).map_err(err)?);
+    set(&out, "topicCounts", &serde::Serialize::serialize(&log.topic_counts, &ser).map_err(err)?);
     Ok(out.into())
 }
 
@@ -987,9 +772,7 @@ pub fn read_log(bytes: &[u8]) -> Result<JsValue, JsError> {
 #[wasm_bindgen]
 pub fn simulate(name: &str, seed: f64) -> Result<String, JsError> {
     if !(seed.is_finite() && seed >= 0.0 && seed.fract() == 0.0 && seed < 9.0e15) {
-        return Err(err(format!(
-            "seed: must be a non-negative integer, got {seed}"
-        )));
+        return Err(err(format!("seed: must be a non-negative integer, got {seed}")));
     }
     let sc = sim::Scenario::preset(name, seed as u64).map_err(err)?;
     let rows = sim::simulate(&sc).map_err(err)?;
@@ -998,11 +781,8 @@ pub fn simulate(name: &str, seed: f64) -> Result<String, JsError> {
 
 /// Simulate a scenario given as an object (same fields as the `# scenario:` CSV comment).
 #[wasm_bindgen(js_name = simulateScenario)]
-pub fn simulate_scenario(
-    #[wasm_bindgen(unchecked_param_type = "object")] scenario: JsValue,
-) -> Result<String, JsError> {
-    let sc: sim::Scenario =
-        serde_wasm_bindgen::from_value(scenario).map_err(|e| err(format!("scenario: {e}")))?;
+pub fn simulate_scenario(#[wasm_bindgen(unchecked_param_type = "object")] scenario: JsValue) -> Result<String, JsError> {
+    let sc: sim::Scenario = serde_wasm_bindgen::from_value(scenario).map_err(|e| err(format!("scenario: {e}")))?;
     let rows = sim::simulate(&sc).map_err(err)?;
     Ok(sim::to_csv(&sc, &rows))
 }
@@ -1010,22 +790,14 @@ pub fn simulate_scenario(
 /// Names of the built-in scenarios.
 #[wasm_bindgen(js_name = scenarioNames, unchecked_return_type = "string[]")]
 pub fn scenario_names() -> Array {
-    sim::preset_names()
-        .into_iter()
-        .map(JsValue::from_str)
-        .collect()
+    sim::preset_names().into_iter().map(JsValue::from_str).collect()
 }
 
 /// Metrics over labelled rows (contract definitions).
 #[wasm_bindgen(unchecked_return_type = "Metrics")]
 pub fn metrics(t: &[f64], label: &[f64], status: &[u8]) -> Result<JsValue, JsError> {
     if t.len() != label.len() || t.len() != status.len() {
-        return Err(err(format!(
-            "metrics: lengths differ: t {}, label {}, status {}",
-            t.len(),
-            label.len(),
-            status.len()
-        )));
+        return Err(err(format!("metrics: lengths differ: t {}, label {}, status {}", t.len(), label.len(), status.len())));
     }
     serde_wasm_bindgen::to_value(&metrics::compute(t, label, status)).map_err(err)
 }
@@ -1033,18 +805,12 @@ pub fn metrics(t: &[f64], label: &[f64], status: &[u8]) -> Result<JsValue, JsErr
 /// Train a model from labelled navlog CSV files (an array of `Uint8Array`).
 /// Pass the result as `config.model`.
 #[wasm_bindgen(js_name = trainFromCsv, unchecked_return_type = "NavguardModel")]
-pub fn train_from_csv(
-    #[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] files: Array,
-    #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,
-) -> Result<JsValue, JsError> {
+pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] files: Array, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
     let cfg = config_from(&config)?;
     let mut streams = vec![];
     for (i, f) in files.iter().enumerate() {
-        let bytes = f
-            .dyn_into::<Uint8Array>()
-            .map_err(|_| err(format!("trainFromCsv: file {i} must be a Uint8Array")))?;
-        let log = logs::csv::read_csv(&bytes.to_vec())
-            .map_err(|e| err(format!("trainFromCsv: file {i}: {e}")))?;
+        let bytes = f.dyn_into::<Uint8Array>().map_err(|_| err(format!("trainFromCsv: file {i} must be a Uint8Array")))?;
+        let log = logs::csv::read_csv(&bytes.to_vec()).map_err(|e| err(format!("trainFromCsv: file {i}: {e}")))?;
         streams.push(log.samples);
     }
     let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();

@@ -31,21 +31,7 @@ fn nan_and_infinities_in_every_column_are_errors_naming_the_field() {
             d.push(&fix(0.0)).unwrap();
             let mut s = fix(0.1);
             // Complete the group so only the infinity is wrong.
-            for (j, v) in [
-                (14, 0.0),
-                (15, 0.0),
-                (16, -9.8),
-                (17, 0.0),
-                (18, 0.0),
-                (19, 0.0),
-                (7, 0.0),
-                (8, 0.0),
-                (9, 0.0),
-                (20, 1.0),
-                (21, 0.0),
-                (22, 0.0),
-                (23, 0.0),
-            ] {
+            for (j, v) in [(14, 0.0), (15, 0.0), (16, -9.8), (17, 0.0), (18, 0.0), (19, 0.0), (7, 0.0), (8, 0.0), (9, 0.0), (20, 1.0), (21, 0.0), (22, 0.0), (23, 0.0)] {
                 s.set(j, v);
             }
             s.set(i, bad);
@@ -101,18 +87,12 @@ fn unreadable_files_give_one_line_reasons() {
     for (bytes, needle) in [
         (&b""[..], "no header"),
         (&b"t,lat,lon,alt\n"[..], ""),
-        (
-            &b"\x00\x01\x02garbage\xff\xfe"[..],
-            "not a ULog or DataFlash",
-        ),
+        (&b"\x00\x01\x02garbage\xff\xfe"[..], "not a ULog or DataFlash"),
         (&b"t;lat;lon\n0;1;2\n"[..], "delimiter"),
         (&b"t,lat\n0,abc\n"[..], "line 2"),
     ] {
         match read_any(bytes) {
-            Ok(log) => assert!(
-                needle.is_empty() && log.samples.is_empty(),
-                "{needle}: expected an error"
-            ),
+            Ok(log) => assert!(needle.is_empty() && log.samples.is_empty(), "{needle}: expected an error"),
             Err(e) => {
                 assert!(e.contains(needle), "{e} should mention {needle}");
                 assert!(!e.contains('\n'), "one line: {e}");
@@ -126,19 +106,10 @@ fn truncated_and_corrupt_binary_logs_read_partially_with_warnings() {
     let ulg = data("px4/sample_px4_events.ulg");
     let cut = read_any(&ulg[..ulg.len() / 2]).unwrap();
     assert!(!cut.samples.is_empty());
-    assert!(
-        cut.warnings
-            .iter()
-            .any(|w| w.to_lowercase().contains("truncat")),
-        "{:?}",
-        cut.warnings
-    );
+    assert!(cut.warnings.iter().any(|w| w.to_lowercase().contains("truncat")), "{:?}", cut.warnings);
     // Corrupt the first format definition's text: still no panic.
     let mut bad = ulg.clone();
-    if let Some(p) = bad
-        .windows(2)
-        .position(|w| w == b"F\0".as_slice() || w[0] == b'F')
-    {
+    if let Some(p) = bad.windows(2).position(|w| w == b"F\0".as_slice() || w[0] == b'F') {
         for b in bad.iter_mut().skip(p + 3).take(40) {
             *b = b'?';
         }
@@ -146,11 +117,7 @@ fn truncated_and_corrupt_binary_logs_read_partially_with_warnings() {
     let _ = read_any(&bad);
     let bin = data("ardupilot/Loiter_RTL.bin");
     let cut = read_any(&bin[..bin.len() / 3 + 7]).unwrap();
-    assert!(
-        cut.warnings.iter().any(|w| w.contains("truncated")),
-        "{:?}",
-        cut.warnings
-    );
+    assert!(cut.warnings.iter().any(|w| w.contains("truncated")), "{:?}", cut.warnings);
     // Detection over a truncated log runs to the end.
     let (rep, _) = navguard::audit::audit(&cut, &Config::default()).unwrap();
     assert!(rep.rows > 1000);

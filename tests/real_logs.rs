@@ -26,10 +26,7 @@ fn every_log_is_recognised_by_content() {
         let log = read_any(&data(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
         assert_eq!(log.format, fmt, "{p}");
         assert!(!log.samples.is_empty(), "{p}: no rows");
-        assert!(
-            log.samples.windows(2).all(|w| w[0].t <= w[1].t),
-            "{p}: rows not sorted by time"
-        );
+        assert!(log.samples.windows(2).all(|w| w[0].t <= w[1].t), "{p}: rows not sorted by time");
     }
 }
 
@@ -39,30 +36,18 @@ fn missing_gps_is_reported_and_no_verdicts_are_made() {
         let log = read_any(&data(p)).unwrap();
         let (rep, cols) = audit(&log, &Config::default()).unwrap();
         assert!(!rep.gps_available, "{p}");
-        assert!(
-            rep.warnings.iter().any(|w| w.contains("GPS unavailable")),
-            "{p}: {:?}",
-            rep.warnings
-        );
+        assert!(rep.warnings.iter().any(|w| w.contains("GPS unavailable")), "{p}: {:?}", rep.warnings);
         assert!(rep.faults.is_empty(), "{p}: {:?}", rep.faults);
         assert!(cols.status.iter().all(|s| *s == 0), "{p}");
     }
     let log = read_any(&data("px4/sample.ulg")).unwrap();
-    assert!(
-        log.warnings.iter().any(|w| w.contains("no GPS topic")),
-        "{:?}",
-        log.warnings
-    );
+    assert!(log.warnings.iter().any(|w| w.contains("no GPS topic")), "{:?}", log.warnings);
 }
 
 #[test]
 fn truncated_dataflash_reads_partially_with_a_warning() {
     let log = read_any(&data("ardupilot/truncated_plane.BIN")).unwrap();
-    assert!(
-        log.warnings.iter().any(|w| w.contains("truncated")),
-        "{:?}",
-        log.warnings
-    );
+    assert!(log.warnings.iter().any(|w| w.contains("truncated")), "{:?}", log.warnings);
     let (rep, _) = audit(&log, &Config::default()).unwrap();
     assert!(rep.rows > 0);
 }
@@ -72,16 +57,10 @@ fn ardupilot_logging_pause_is_a_data_gap_not_a_fault() {
     let log = read_any(&data("ardupilot/Loiter_RTL.bin")).unwrap();
     let (rep, _) = audit(&log, &Config::default()).unwrap();
     // The pause runs 51.6–73.8 s on the boot clock.
-    let gap = rep
-        .data_gaps
-        .iter()
-        .find(|g| g.start < 52.0 && g.end > 73.0)
-        .unwrap_or_else(|| panic!("{:?}", rep.data_gaps));
+    let gap = rep.data_gaps.iter().find(|g| g.start < 52.0 && g.end > 73.0).unwrap_or_else(|| panic!("{:?}", rep.data_gaps));
     // No flagged interval may span the pause: verdicts stop at its last row.
     assert!(
-        rep.faults
-            .iter()
-            .all(|f| f.end <= gap.start || f.start >= gap.end),
+        rep.faults.iter().all(|f| f.end <= gap.start || f.start >= gap.end),
         "a fault across the logging pause {gap:?}: {:?}",
         rep.faults
     );
@@ -108,33 +87,15 @@ fn flagged_outside(p: &str, a: f64, b: f64) -> (f64, Vec<navguard::audit::FaultI
 fn real_ardupilot_outage_is_found_within_2s_and_little_else() {
     // Fix lost at about 97.0 s boot time, back at 103.4 s (data README).
     let (outside, faults) = flagged_outside("ardupilot/Loiter_RTL.bin", 97.0, 104.5);
-    let first = faults
-        .iter()
-        .filter(|f| f.end >= 97.0 && f.start <= 103.4)
-        .map(|f| f.start.max(97.0))
-        .fold(f64::INFINITY, f64::min);
-    assert!(
-        first <= 99.0,
-        "outage first flagged at {first} s: {faults:?}"
-    );
-    assert!(
-        outside <= 0.02,
-        "{:.2}% of GPS epochs flagged outside the outage",
-        100.0 * outside
-    );
+    let first = faults.iter().filter(|f| f.end >= 97.0 && f.start <= 103.4).map(|f| f.start.max(97.0)).fold(f64::INFINITY, f64::min);
+    assert!(first <= 99.0, "outage first flagged at {first} s: {faults:?}");
+    assert!(outside <= 0.02, "{:.2}% of GPS epochs flagged outside the outage", 100.0 * outside);
 }
 
 #[test]
 fn clean_real_logs_stay_clean() {
-    for p in [
-        "csv/ansfl_phantom4_rtk_clean.csv",
-        "px4/sample_px4_events.ulg",
-    ] {
+    for p in ["csv/ansfl_phantom4_rtk_clean.csv", "px4/sample_px4_events.ulg"] {
         let (frac, _) = flagged_outside(p, f64::INFINITY, f64::INFINITY);
-        assert!(
-            frac <= 0.01,
-            "{p}: {:.2}% of GPS epochs flagged",
-            100.0 * frac
-        );
+        assert!(frac <= 0.01, "{p}: {:.2}% of GPS epochs flagged", 100.0 * frac);
     }
 }

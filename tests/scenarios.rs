@@ -25,28 +25,17 @@ fn run(sc: &Scenario) -> Metrics {
 fn paper_scenario_meets_our_target_on_five_seeds() {
     for seed in 1..=5 {
         let m = run(&Scenario::paper(OutageMode::Degraded, seed));
-        assert!(
-            m.accuracy >= 0.99 && m.false_alarm_rate <= 0.05 && m.misdetection_rate <= 0.02,
-            "seed {seed}: {m:?}"
-        );
+        assert!(m.accuracy >= 0.99 && m.false_alarm_rate <= 0.05 && m.misdetection_rate <= 0.02, "seed {seed}: {m:?}");
     }
 }
 
 #[test]
 fn clean_flights_stay_under_one_percent() {
     for seed in 1..=5 {
-        for tr in [
-            Trajectory::Aggressive,
-            Trajectory::Survey,
-            Trajectory::Paper,
-        ] {
+        for tr in [Trajectory::Aggressive, Trajectory::Survey, Trajectory::Paper] {
             let m = run(&Scenario::clean(tr, seed, 300.0));
             let frac = m.fp as f64 / (m.fp + m.tn) as f64;
-            assert!(
-                frac < 0.01,
-                "{tr:?} seed {seed}: {:.2}% flagged",
-                100.0 * frac
-            );
+            assert!(frac < 0.01, "{tr:?} seed {seed}: {:.2}% flagged", 100.0 * frac);
         }
     }
 }
@@ -65,15 +54,8 @@ fn gps_faults_are_detected_at_held_out_magnitudes_and_times() {
     for (kind, mag) in cases {
         for (seed, start) in [(11u64, 80.0), (12, 150.0), (13, 200.0)] {
             let m = run(&Scenario::with_fault(kind, mag, start, 12.0, seed));
-            assert_eq!(
-                m.detected_intervals, 1,
-                "{kind:?} {mag} seed {seed} at {start} s: {m:?}"
-            );
-            assert!(
-                m.mean_detection_delay <= 3.0,
-                "{kind:?} {mag} seed {seed}: delay {}",
-                m.mean_detection_delay
-            );
+            assert_eq!(m.detected_intervals, 1, "{kind:?} {mag} seed {seed} at {start} s: {m:?}");
+            assert!(m.mean_detection_delay <= 3.0, "{kind:?} {mag} seed {seed}: delay {}", m.mean_detection_delay);
         }
     }
 }
@@ -87,11 +69,7 @@ fn accel_bias_is_detected_on_every_trajectory_at_held_out_times() {
     let mut missed = vec![];
     for mag in [0.3, 0.5, 1.0] {
         for (seed, start) in [(21u64, 60.0), (22, 110.0), (23, 190.0)] {
-            for tr in [
-                Trajectory::Paper,
-                Trajectory::Aggressive,
-                Trajectory::Survey,
-            ] {
+            for tr in [Trajectory::Paper, Trajectory::Aggressive, Trajectory::Survey] {
                 let mut sc = Scenario::clean(tr, seed, 250.0);
                 sc.faults.push(navguard::sim::Fault {
                     kind: FaultKind::AccelBias,
@@ -108,10 +86,7 @@ fn accel_bias_is_detected_on_every_trajectory_at_held_out_times() {
     }
     // 0.3 m/s² is at the edge (the sweep in the README: 28 of 30); every
     // 0.5 and 1 m/s² bias must be caught.
-    assert!(
-        missed.iter().all(|m| m.starts_with("0.3")) && missed.len() <= 1,
-        "{missed:#?}"
-    );
+    assert!(missed.iter().all(|m| m.starts_with("0.3")) && missed.len() <= 1, "{missed:#?}");
 }
 
 /// Regression: the IMU window once kept a zeroed GPS velocity (and an
@@ -121,10 +96,7 @@ fn accel_bias_is_detected_on_every_trajectory_at_held_out_times() {
 fn the_imu_test_does_not_outlive_a_gps_fault() {
     for seed in 1..=3 {
         let m = run(&Scenario::preset("zero-velocity", seed).unwrap());
-        assert!(
-            m.detected_intervals == 1 && m.fp <= 10,
-            "seed {seed}: {m:?}"
-        );
+        assert!(m.detected_intervals == 1 && m.fp <= 10, "seed {seed}: {m:?}");
         let m = run(&Scenario::paper(OutageMode::Degraded, seed));
         assert!(m.fp <= 15, "paper seed {seed}: {m:?}");
     }
@@ -139,17 +111,8 @@ fn the_imu_test_does_not_outlive_a_gps_fault() {
 #[test]
 fn a_detected_accel_bias_is_not_learnt_into_the_filter_and_ends_promptly() {
     for (seed, start) in [(11u64, 80.0), (12, 150.0), (13, 200.0)] {
-        let m = run(&Scenario::with_fault(
-            FaultKind::AccelBias,
-            1.0,
-            start,
-            15.0,
-            seed,
-        ));
-        assert!(
-            m.detected_intervals == 1 && m.fp <= 20 && m.r#fn <= 10,
-            "seed {seed} at {start} s: {m:?}"
-        );
+        let m = run(&Scenario::with_fault(FaultKind::AccelBias, 1.0, start, 15.0, seed));
+        assert!(m.detected_intervals == 1 && m.fp <= 20 && m.r#fn <= 10, "seed {seed} at {start} s: {m:?}");
     }
 }
 
@@ -166,14 +129,8 @@ fn the_audit_blames_the_imu_for_an_accel_bias_and_the_gps_for_zero_velocity() {
         let csv = to_csv(&sc, &simulate(&sc).unwrap());
         let log = read_any(csv.as_bytes()).unwrap();
         let (report, _) = audit(&log, &Config::default()).unwrap();
-        let inside: Vec<_> = report
-            .faults
-            .iter()
-            .filter(|f| f.kind == "residual" && f.end >= 120.0 && f.start <= 135.0)
-            .collect();
-        assert!(
-            !inside.is_empty() && inside.iter().all(|f| f.driver == want),
-            "{preset}: {inside:?}"
-        );
+        let inside: Vec<_> =
+            report.faults.iter().filter(|f| f.kind == "residual" && f.end >= 120.0 && f.start <= 135.0).collect();
+        assert!(!inside.is_empty() && inside.iter().all(|f| f.driver == want), "{preset}: {inside:?}");
     }
 }

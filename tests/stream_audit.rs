@@ -60,11 +60,7 @@ fn streamed_equals_whole_on_a_simulated_flight_with_labels() {
     let csv = to_csv(&sc, &simulate(&sc).unwrap());
     let cfg = Config::default();
     let (rw, cw) = whole(csv.as_bytes(), &cfg);
-    assert!(
-        rw["metrics"]["tp"].as_u64().unwrap() > 250,
-        "labelled metrics must be computed: {}",
-        rw["metrics"]
-    );
+    assert!(rw["metrics"]["tp"].as_u64().unwrap() > 250, "labelled metrics must be computed: {}", rw["metrics"]);
     for sizes in [&[1 << 20][..], &[7, 4093, 65536, 1][..], &[csv.len()][..]] {
         let (rs, cs) = streamed(csv.as_bytes(), &cfg, sizes);
         assert_eq!(rs, rw, "chunks {sizes:?}");
@@ -74,8 +70,7 @@ fn streamed_equals_whole_on_a_simulated_flight_with_labels() {
 
 #[test]
 fn streamed_equals_whole_on_the_real_csv_log() {
-    let bytes =
-        std::fs::read("../shared/data/csv/ansfl_phantom4_rtk_clean.csv").expect("shared data");
+    let bytes = std::fs::read("../shared/data/csv/ansfl_phantom4_rtk_clean.csv").expect("shared data");
     let cfg = Config::default();
     let (rw, cw) = whole(&bytes, &cfg);
     assert!(rw["gpsEpochs"].as_u64().unwrap() > 1000);
@@ -99,10 +94,6 @@ fn bad_rows_and_bad_lines_stream_like_whole_files() {
     run.feed(b"t,lat\n0,1\n").unwrap();
     let e = run.feed(b"0.1,abc\n").unwrap_err();
     assert!(e.contains("line 3") && e.contains("abc"), "{e}");
-    let e = StreamAudit::new(&cfg, false)
-        .unwrap()
-        .finish()
-        .err()
-        .unwrap();
+    let e = StreamAudit::new(&cfg, false).unwrap().finish().err().unwrap();
     assert!(e.contains("no header"), "{e}");
 }

@@ -18,10 +18,7 @@ fn scenario(name: &str, seed: u64) -> (JsValue, Vec<f64>, Vec<f64>) {
     let log = read_log(csv.as_bytes()).unwrap();
     let cols = get(&log, "columns");
     let t = get(&cols, "t").dyn_into::<Float64Array>().unwrap().to_vec();
-    let label = get(&cols, "label")
-        .dyn_into::<Float64Array>()
-        .unwrap()
-        .to_vec();
+    let label = get(&cols, "label").dyn_into::<Float64Array>().unwrap().to_vec();
     let input = Object::new();
     for k in js_sys::Object::keys(cols.unchecked_ref::<Object>()).iter() {
         let name = k.as_string().unwrap();
@@ -44,10 +41,7 @@ fn run(name: &str, seed: u64, cfg: JsValue) -> (Vec<f64>, Vec<f64>, Vec<u8>) {
     let (cols, t, label) = scenario(name, seed);
     let mut det = Detector::new(cfg).unwrap();
     let out = det.push_columns(&cols).unwrap();
-    let status = get(&out, "status")
-        .dyn_into::<Uint8Array>()
-        .unwrap()
-        .to_vec();
+    let status = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
     (t, label, status)
 }
 
@@ -59,17 +53,9 @@ fn rate(m: &JsValue, k: &str) -> f64 {
 fn paper_scenario_meets_the_papers_table1_at_tc100() {
     let (t, label, status) = run("paper", 1, config(&[("tc", 100.0)]));
     let m = metrics(&t, &label, &status).unwrap();
-    let (acc, far, mdr) = (
-        rate(&m, "accuracy"),
-        rate(&m, "falseAlarmRate"),
-        rate(&m, "misdetectionRate"),
-    );
+    let (acc, far, mdr) = (rate(&m, "accuracy"), rate(&m, "falseAlarmRate"), rate(&m, "misdetectionRate"));
     web_sys_log(&format!("paper scenario TC=100: accuracy {acc:.4} (target 0.99), false alarm {far:.4} (target 0.05), misdetection {mdr:.4} (target 0.02)"));
-    assert_eq!(
-        rate(&m, "tp") + rate(&m, "fn"),
-        300.0,
-        "300 labelled outage epochs"
-    );
+    assert_eq!(rate(&m, "tp") + rate(&m, "fn"), 300.0, "300 labelled outage epochs");
     assert!(acc >= 0.977, "accuracy {acc}");
     assert!(far <= 0.13, "false alarm rate {far}");
     assert!(mdr <= 0.047, "misdetection rate {mdr}");
@@ -80,33 +66,17 @@ fn silent_outages_are_flagged_on_every_row() {
     let (t, label, status) = run("paper-silent", 2, JsValue::UNDEFINED);
     let m = metrics(&t, &label, &status).unwrap();
     assert_eq!(rate(&m, "detectedIntervals"), 3.0);
-    assert!(
-        rate(&m, "misdetectionRate") <= 0.02,
-        "{}",
-        rate(&m, "misdetectionRate")
-    );
+    assert!(rate(&m, "misdetectionRate") <= 0.02, "{}", rate(&m, "misdetectionRate"));
 }
 
 /// Every fault kind of the core issue, through the wasm facade.
 #[wasm_bindgen_test]
 fn every_fault_kind_is_detected() {
-    for kind in [
-        "step",
-        "ramp",
-        "noise",
-        "frozen",
-        "zero-velocity",
-        "baro-stuck",
-        "accel-bias",
-    ] {
+    for kind in ["step", "ramp", "noise", "frozen", "zero-velocity", "baro-stuck", "accel-bias"] {
         for seed in [1u64, 2] {
             let (t, label, status) = run(kind, seed, JsValue::UNDEFINED);
             let m = metrics(&t, &label, &status).unwrap();
-            assert_eq!(
-                rate(&m, "detectedIntervals"),
-                1.0,
-                "{kind} seed {seed} not detected"
-            );
+            assert_eq!(rate(&m, "detectedIntervals"), 1.0, "{kind} seed {seed} not detected");
         }
     }
 }
@@ -116,15 +86,8 @@ fn clean_aggressive_flights_stay_quiet() {
     for seed in [1u64, 2, 3] {
         let (_, label, status) = run("clean-aggressive", seed, JsValue::UNDEFINED);
         let epochs = label.iter().filter(|l| !l.is_nan()).count();
-        let flagged = label
-            .iter()
-            .zip(&status)
-            .filter(|(l, s)| !l.is_nan() && **s == 1)
-            .count();
-        assert!(
-            (flagged as f64) < 0.01 * epochs as f64,
-            "seed {seed}: {flagged}/{epochs} flagged"
-        );
+        let flagged = label.iter().zip(&status).filter(|(l, s)| !l.is_nan() && **s == 1).count();
+        assert!((flagged as f64) < 0.01 * epochs as f64, "seed {seed}: {flagged}/{epochs} flagged");
     }
 }
 
@@ -133,19 +96,10 @@ fn push_and_push_columns_agree_row_for_row() {
     let (cols, _, _) = scenario("step", 3);
     let mut a = Detector::new(JsValue::UNDEFINED).unwrap();
     let out = a.push_columns(&cols).unwrap();
-    let st = get(&out, "status")
-        .dyn_into::<Uint8Array>()
-        .unwrap()
-        .to_vec();
+    let st = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
     let f = get(&out, "f").dyn_into::<Float64Array>().unwrap().to_vec();
-    let names: Vec<String> = Object::keys(cols.unchecked_ref::<Object>())
-        .iter()
-        .map(|k| k.as_string().unwrap())
-        .collect();
-    let arrays: Vec<Vec<f64>> = names
-        .iter()
-        .map(|n| get(&cols, n).dyn_into::<Float64Array>().unwrap().to_vec())
-        .collect();
+    let names: Vec<String> = Object::keys(cols.unchecked_ref::<Object>()).iter().map(|k| k.as_string().unwrap()).collect();
+    let arrays: Vec<Vec<f64>> = names.iter().map(|n| get(&cols, n).dyn_into::<Float64Array>().unwrap().to_vec()).collect();
     let mut b = Detector::new(JsValue::UNDEFINED).unwrap();
     for i in 0..st.len() {
         let o = Object::new();
@@ -156,11 +110,7 @@ fn push_and_push_columns_agree_row_for_row() {
         }
         let r = b.push(&o.into()).unwrap();
         assert_eq!(get(&r, "status").as_f64().unwrap() as u8, st[i], "row {i}");
-        assert_eq!(
-            get(&r, "f").as_f64().unwrap().to_bits(),
-            f[i].to_bits(),
-            "row {i}"
-        );
+        assert_eq!(get(&r, "f").as_f64().unwrap().to_bits(), f[i].to_bits(), "row {i}");
     }
 }
 
@@ -168,32 +118,16 @@ fn push_and_push_columns_agree_row_for_row() {
 fn bad_input_throws_and_the_detector_keeps_working() {
     let mut d = Detector::new(JsValue::UNDEFINED).unwrap();
     let row = |pairs: &[(&str, f64)]| config(pairs);
-    d.push(&row(&[
-        ("t", 1.0),
-        ("lat", 31.94),
-        ("lon", 118.79),
-        ("alt", 20.0),
-    ]))
-    .unwrap();
+    d.push(&row(&[("t", 1.0), ("lat", 31.94), ("lon", 118.79), ("alt", 20.0)])).unwrap();
     let msg = |e: wasm_bindgen::JsError| -> String {
         let v: JsValue = e.into();
         get(&v, "message").as_string().unwrap()
     };
     let e = msg(d.push(&row(&[("t", 0.5)])).unwrap_err());
-    assert!(
-        e.contains("'t'") && e.contains("backwards") && e.contains("row 1"),
-        "{e}"
-    );
+    assert!(e.contains("'t'") && e.contains("backwards") && e.contains("row 1"), "{e}");
     let e = msg(d.push(&row(&[("t", 2.0), ("lat", 31.9)])).unwrap_err());
     assert!(e.contains("'lon'"), "{e}");
-    let e = msg(d
-        .push(&row(&[
-            ("t", 2.0),
-            ("ax", f64::INFINITY),
-            ("ay", 0.0),
-            ("az", 0.0),
-        ]))
-        .unwrap_err());
+    let e = msg(d.push(&row(&[("t", 2.0), ("ax", f64::INFINITY), ("ay", 0.0), ("az", 0.0)])).unwrap_err());
     assert!(e.contains("'ax'"), "{e}");
     let e = msg(Detector::new(row(&[("bogus", 1.0)])).err().unwrap());
     assert!(e.contains("bogus"), "{e}");
@@ -205,14 +139,7 @@ fn bad_input_throws_and_the_detector_keeps_working() {
     let e = msg(d.push_columns(&cols.into()).unwrap_err());
     assert!(e.contains("'baro'") && e.contains("length"), "{e}");
     // Still usable, nothing lost: the next row continues from t=1.
-    let ok = d
-        .push(&row(&[
-            ("t", 1.1),
-            ("lat", 31.94),
-            ("lon", 118.79),
-            ("alt", 20.0),
-        ]))
-        .unwrap();
+    let ok = d.push(&row(&[("t", 1.1), ("lat", 31.94), ("lon", 118.79), ("alt", 20.0)])).unwrap();
     assert_eq!(get(&ok, "status").as_f64(), Some(0.0));
     assert_eq!(get(&d.stats().unwrap(), "rows").as_f64(), Some(2.0));
 }
@@ -226,19 +153,13 @@ fn snapshot_and_restore_resume_bit_identically() {
     let cfg = || config(&[("tc", 20.0)]);
     let mut whole = Detector::new(cfg()).unwrap();
     let out = whole.push_columns(&cols).unwrap();
-    let st = get(&out, "status")
-        .dyn_into::<Uint8Array>()
-        .unwrap()
-        .to_vec();
+    let st = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
     let f = get(&out, "f").dyn_into::<Float64Array>().unwrap().to_vec();
     let cut = t.iter().position(|&x| x >= 105.0).unwrap() as u32;
     let part = |a: u32, b: u32| {
         let o = Object::new();
         for k in Object::keys(cols.unchecked_ref::<Object>()).iter() {
-            let arr = Reflect::get(&cols, &k)
-                .unwrap()
-                .dyn_into::<Float64Array>()
-                .unwrap();
+            let arr = Reflect::get(&cols, &k).unwrap().dyn_into::<Float64Array>().unwrap();
             Reflect::set(&o, &k, &arr.subarray(a, b)).unwrap();
         }
         JsValue::from(o)
@@ -248,37 +169,17 @@ fn snapshot_and_restore_resume_bit_identically() {
     let snap = first.snapshot().unwrap().to_vec();
     drop(first);
     let info = navguard::wasm::snapshot_info(&snap).unwrap();
-    assert_eq!(
-        get(&info, "version").as_f64(),
-        Some(navguard::snapshot::VERSION as f64)
-    );
+    assert_eq!(get(&info, "version").as_f64(), Some(navguard::snapshot::VERSION as f64));
     let mut second = Detector::restore(&snap).unwrap();
     let o2 = second.push_columns(&part(cut, t.len() as u32)).unwrap();
-    let mut st2 = get(&o1, "status")
-        .dyn_into::<Uint8Array>()
-        .unwrap()
-        .to_vec();
-    st2.extend(
-        get(&o2, "status")
-            .dyn_into::<Uint8Array>()
-            .unwrap()
-            .to_vec(),
-    );
+    let mut st2 = get(&o1, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
+    st2.extend(get(&o2, "status").dyn_into::<Uint8Array>().unwrap().to_vec());
     let mut f2 = get(&o1, "f").dyn_into::<Float64Array>().unwrap().to_vec();
     f2.extend(get(&o2, "f").dyn_into::<Float64Array>().unwrap().to_vec());
     assert_eq!(st, st2);
-    assert!(
-        f.iter().zip(&f2).all(|(a, b)| a.to_bits() == b.to_bits()),
-        "F differs after restore"
-    );
-    assert!(
-        get(&whole.stats().unwrap(), "retrains").as_f64().unwrap() > 0.0,
-        "no retraining exercised"
-    );
-    assert_eq!(
-        get(&second.stats().unwrap(), "rows").as_f64(),
-        Some(t.len() as f64)
-    );
+    assert!(f.iter().zip(&f2).all(|(a, b)| a.to_bits() == b.to_bits()), "F differs after restore");
+    assert!(get(&whole.stats().unwrap(), "retrains").as_f64().unwrap() > 0.0, "no retraining exercised");
+    assert_eq!(get(&second.stats().unwrap(), "rows").as_f64(), Some(t.len() as f64));
     // A damaged snapshot is an Error, not a panic.
     let mut bad = snap.clone();
     bad[snap.len() / 3] ^= 1;
@@ -290,40 +191,18 @@ fn snapshot_and_restore_resume_bit_identically() {
 /// GPS step and no method's score is NaN on a GPS epoch.
 #[wasm_bindgen_test]
 fn every_method_streams_and_catches_a_step() {
-    for method in [
-        "anfis",
-        "chi2",
-        "nis",
-        "gate",
-        "mahalanobis",
-        "rms",
-        "knee",
-        "adaptive",
-    ] {
+    for method in ["anfis", "chi2", "nis", "gate", "mahalanobis", "rms", "knee", "adaptive"] {
         let (cols, t, label) = scenario("step", 2);
         let cfg = Object::new();
         Reflect::set(&cfg, &"method".into(), &method.into()).unwrap();
         let mut det = Detector::new(cfg.into()).unwrap();
         let out = det.push_columns(&cols).unwrap();
-        let status = get(&out, "status")
-            .dyn_into::<Uint8Array>()
-            .unwrap()
-            .to_vec();
+        let status = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
         let f = get(&out, "f").dyn_into::<Float64Array>().unwrap().to_vec();
         let m = metrics(&t, &label, &status).unwrap();
-        assert_eq!(
-            rate(&m, "detectedIntervals"),
-            1.0,
-            "{method}: step not detected"
-        );
-        assert!(
-            label.iter().zip(&f).all(|(l, f)| l.is_nan() || !f.is_nan()),
-            "{method}: NaN score"
-        );
-        assert_eq!(
-            get(&det.config().unwrap(), "method").as_string().as_deref(),
-            Some(method)
-        );
+        assert_eq!(rate(&m, "detectedIntervals"), 1.0, "{method}: step not detected");
+        assert!(label.iter().zip(&f).all(|(l, f)| l.is_nan() || !f.is_nan()), "{method}: NaN score");
+        assert_eq!(get(&det.config().unwrap(), "method").as_string().as_deref(), Some(method));
     }
 }
 
@@ -341,10 +220,7 @@ fn gan_fdsr_streams_and_names_the_stepped_satellite() {
     Reflect::set(&cfg, &"method".into(), &"gan".into()).unwrap();
     let csv = get(&sim, "csv").as_string().unwrap();
     let prn = get(&sim, "faultyPrn").as_f64().unwrap();
-    let (start, end) = (
-        get(&sim, "faultStart").as_f64().unwrap(),
-        get(&sim, "faultEnd").as_f64().unwrap(),
-    );
+    let (start, end) = (get(&sim, "faultStart").as_f64().unwrap(), get(&sim, "faultEnd").as_f64().unwrap());
     let check = |mut det: TightDetectorJs, min_rate: f64| {
         let out: js_sys::Array = det.push_csv(&csv).unwrap().dyn_into().unwrap();
         let (mut first, mut named, mut n) = (None, 0usize, 0usize);
@@ -361,26 +237,15 @@ fn gan_fdsr_streams_and_names_the_stepped_satellite() {
                 first.get_or_insert(t - start);
             }
         }
-        assert!(
-            first.is_some_and(|d| d <= 2.0),
-            "first flag {first:?} s after onset"
-        );
-        assert!(
-            named as f64 >= min_rate * n as f64,
-            "flagged {named} of {n} fault epochs"
-        );
+        assert!(first.is_some_and(|d| d <= 2.0), "first flag {first:?} s after onset");
+        assert!(named as f64 >= min_rate * n as f64, "flagged {named} of {n} fault epochs");
     };
     check(TightDetectorJs::new(cfg.clone()).unwrap(), 0.9);
     let opts = Object::new();
     Reflect::set(&opts, &"epochs".into(), &1.0.into()).unwrap();
     let trained = tight_gan_train(opts.into(), JsValue::UNDEFINED).unwrap();
-    let bytes = get(&trained, "model")
-        .dyn_into::<Uint8Array>()
-        .unwrap()
-        .to_vec();
-    assert!(get(&trained, "t2")
-        .as_f64()
-        .is_some_and(|t| t.is_finite() && t > 0.0));
+    let bytes = get(&trained, "model").dyn_into::<Uint8Array>().unwrap().to_vec();
+    assert!(get(&trained, "t2").as_f64().is_some_and(|t| t.is_finite() && t > 0.0));
     check(TightDetectorJs::with_gan_model(cfg, &bytes).unwrap(), 0.5);
 }
 

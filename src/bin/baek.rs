@@ -84,37 +84,15 @@ fn markdown(r: &Report) -> String {
     }
     o += "\n### Ordering AT ≤ KT ≤ RT\n\n";
     o += "| | AT | KT | RT | AT ≤ KT ≤ RT (means) | cells where it holds |\n|---|---|---|---|---|---|\n";
-    o += &format!(
-        "| mean FNR, paper | {:.3} | {:.3} | {:.3} | {} | |\n",
-        pf[0],
-        pf[1],
-        pf[2],
-        yes(pf[0] <= pf[1] && pf[1] <= pf[2])
-    );
+    o += &format!("| mean FNR, paper | {:.3} | {:.3} | {:.3} | {} | |\n", pf[0], pf[1], pf[2], yes(pf[0] <= pf[1] && pf[1] <= pf[2]));
     o += &format!(
         "| mean FNR, ours | {:.3} | {:.3} | {:.3} | {} | {}/{} |\n",
-        g.mean_fnr[0],
-        g.mean_fnr[1],
-        g.mean_fnr[2],
-        yes(g.fnr_means_ordered),
-        g.fnr_cells,
-        g.cells
+        g.mean_fnr[0], g.mean_fnr[1], g.mean_fnr[2], yes(g.fnr_means_ordered), g.fnr_cells, g.cells
     );
-    o += &format!(
-        "| mean FPR, paper | {:.3} | {:.3} | {:.3} | {} | |\n",
-        pp[0],
-        pp[1],
-        pp[2],
-        yes(pp[0] <= pp[1] && pp[1] <= pp[2])
-    );
+    o += &format!("| mean FPR, paper | {:.3} | {:.3} | {:.3} | {} | |\n", pp[0], pp[1], pp[2], yes(pp[0] <= pp[1] && pp[1] <= pp[2]));
     o += &format!(
         "| mean FPR, ours | {:.3} | {:.3} | {:.3} | {} | {}/{} |\n",
-        g.mean_fpr[0],
-        g.mean_fpr[1],
-        g.mean_fpr[2],
-        yes(g.fpr_means_ordered),
-        g.fpr_cells,
-        g.cells
+        g.mean_fpr[0], g.mean_fpr[1], g.mean_fpr[2], yes(g.fpr_means_ordered), g.fpr_cells, g.cells
     );
     o
 }

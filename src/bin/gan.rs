@@ -16,12 +16,8 @@ use std::time::Instant;
 
 use navguard::tight::chaos::table1_markdown;
 use navguard::tight::fdi::{FdsrConfig, Strategy};
-use navguard::tight::gan_fdsr::{
-    default_model, train_detector, GanDetectorModel, GanInput, GanTrainOptions,
-};
-use navguard::tight::scenario::{
-    environments, run, FaultSpec, FaultType, RunRecord, RunSpec, SimConfig, World,
-};
+use navguard::tight::gan_fdsr::{default_model, train_detector, GanDetectorModel, GanInput, GanTrainOptions};
+use navguard::tight::scenario::{environments, run, FaultSpec, FaultType, RunRecord, RunSpec, SimConfig, World};
 
 fn main() -> ExitCode {
     match real_main() {
@@ -34,25 +30,16 @@ fn main() -> ExitCode {
 }
 
 fn parse_range(v: &str, flag: &str) -> Result<Vec<u64>, String> {
-    let (a, b) = v
-        .split_once("..=")
-        .ok_or_else(|| format!("{flag}: expected A..=B, got {v:?}"))?;
-    let a: u64 = a
-        .parse()
-        .map_err(|_| format!("{flag}: not an integer: {a:?}"))?;
-    let b: u64 = b
-        .parse()
-        .map_err(|_| format!("{flag}: not an integer: {b:?}"))?;
+    let (a, b) = v.split_once("..=").ok_or_else(|| format!("{flag}: expected A..=B, got {v:?}"))?;
+    let a: u64 = a.parse().map_err(|_| format!("{flag}: not an integer: {a:?}"))?;
+    let b: u64 = b.parse().map_err(|_| format!("{flag}: not an integer: {b:?}"))?;
     if b < a {
         return Err(format!("{flag}: empty range {v:?}"));
     }
     Ok((a..=b).collect())
 }
 
-fn num<T: std::str::FromStr>(
-    args: &mut impl Iterator<Item = String>,
-    flag: &str,
-) -> Result<T, String> {
+fn num<T: std::str::FromStr>(args: &mut impl Iterator<Item = String>, flag: &str) -> Result<T, String> {
     let v = args.next().ok_or_else(|| format!("{flag} needs a value"))?;
     v.parse().map_err(|_| format!("{flag}: bad value {v:?}"))
 }
@@ -72,12 +59,8 @@ fn train(mut args: impl Iterator<Item = String>) -> Result<(), String> {
     let mut out = "src/tight/gan_default.bin".to_string();
     while let Some(a) = args.next() {
         match a.as_str() {
-            "--seeds" => {
-                opts.train_seeds = parse_range(&args.next().unwrap_or_default(), "--seeds")?
-            }
-            "--calib" => {
-                opts.calib_seeds = parse_range(&args.next().unwrap_or_default(), "--calib")?
-            }
+            "--seeds" => opts.train_seeds = parse_range(&args.next().unwrap_or_default(), "--seeds")?,
+            "--calib" => opts.calib_seeds = parse_range(&args.next().unwrap_or_default(), "--calib")?,
             "--epochs" => opts.gan.epochs = num(&mut args, "--epochs")?,
             "--hidden" => opts.gan.hidden = num(&mut args, "--hidden")?,
             "--window" => opts.gan.window = num(&mut args, "--window")?,
@@ -102,21 +85,14 @@ fn train(mut args: impl Iterator<Item = String>) -> Result<(), String> {
     let mut last = Instant::now();
     let (model, report) = train_detector(&world, &sim, &prns, &opts, &mut |p| {
         if last.elapsed().as_secs_f64() > 2.0 || p.epoch == p.epochs {
-            eprintln!(
-                "epoch {}/{}: D loss {:.4}, G loss {:.4}, D(real) {:.3}, D(fake) {:.3}",
-                p.epoch, p.epochs, p.d_loss, p.g_loss, p.d_real, p.d_fake
-            );
+            eprintln!("epoch {}/{}: D loss {:.4}, G loss {:.4}, D(real) {:.3}, D(fake) {:.3}", p.epoch, p.epochs, p.d_loss, p.g_loss, p.d_real, p.d_fake);
             last = Instant::now();
         }
         true
     })
     .map_err(|e| e.to_string())?;
     let secs = t0.elapsed().as_secs_f64();
-    println!(
-        "### Table 1: chaos indices of the simulated satellites ({} series, seed {})\n",
-        opts.input.name(),
-        opts.train_seeds[0]
-    );
+    println!("### Table 1: chaos indices of the simulated satellites ({} series, seed {})\n", opts.input.name(), opts.train_seeds[0]);
     println!("{}", table1_markdown(&report.chaos));
     println!(
         "chosen tau {} s, m {} (medians); {} training windows, {} calibration windows; {} parameters",
@@ -126,11 +102,7 @@ fn train(mut args: impl Iterator<Item = String>) -> Result<(), String> {
         report.calib_windows,
         model.gan.param_count()
     );
-    println!(
-        "lambda {:.4}; T2 {:?}",
-        model.gan.lambda(),
-        report.threshold
-    );
+    println!("lambda {:.4}; T2 {:?}", model.gan.lambda(), report.threshold);
     println!("training took {secs:.1} s natively");
     let bytes = model.to_bytes().map_err(|e| e.to_string())?;
     std::fs::write(&out, &bytes).map_err(|e| format!("{out}: {e}"))?;
@@ -166,8 +138,7 @@ fn table5(mut args: impl Iterator<Item = String>) -> Result<(), String> {
         return Err("--runs: must be >= 1".into());
     }
     let read = |p: &str| -> Result<GanDetectorModel, String> {
-        GanDetectorModel::from_bytes(&std::fs::read(p).map_err(|e| format!("{p}: {e}"))?)
-            .map_err(|e| format!("{p}: {e}"))
+        GanDetectorModel::from_bytes(&std::fs::read(p).map_err(|e| format!("{p}: {e}"))?).map_err(|e| format!("{p}: {e}"))
     };
     let ours = match &model_path {
         Some(p) => read(p)?,
@@ -180,9 +151,7 @@ fn table5(mut args: impl Iterator<Item = String>) -> Result<(), String> {
     let sim = SimConfig::default();
     let world = World::new(&sim).map_err(|e| e.to_string())?;
     let envs = environments(&world, &sim).map_err(|e| e.to_string())?;
-    let env = envs
-        .get(env_no.wrapping_sub(1))
-        .ok_or_else(|| format!("--env: 1..={}, got {env_no}", envs.len()))?;
+    let env = envs.get(env_no.wrapping_sub(1)).ok_or_else(|| format!("--env: 1..={}, got {env_no}", envs.len()))?;
     // The fault section of Section 4.2 (300–360 s) on the environment's faulty satellite.
     let (a, b) = (300.0, 360.0);
     let methods: [(&str, Strategy, Option<&GanDetectorModel>); 4] = [
@@ -202,30 +171,14 @@ fn table5(mut args: impl Iterator<Item = String>) -> Result<(), String> {
         prns: &env.prns,
         watch_prn: env.faulty_prn,
         fault,
-        fdsr: FdsrConfig {
-            strategy,
-            alpha: 0.001,
-            eta,
-        },
+        fdsr: FdsrConfig { strategy, alpha: 0.001, eta },
         seed: s,
         gan,
     };
     for kind in FaultType::ALL {
-        let mut row: Vec<Cell> = methods
-            .iter()
-            .map(|_| Cell {
-                delays: vec![],
-                missed: vec![],
-                rel_err: vec![],
-            })
-            .collect();
+        let mut row: Vec<Cell> = methods.iter().map(|_| Cell { delays: vec![], missed: vec![], rel_err: vec![] }).collect();
         for &s in &seeds {
-            let fault = FaultSpec {
-                prn: env.faulty_prn,
-                kind,
-                start: a,
-                end: b,
-            };
+            let fault = FaultSpec { prn: env.faulty_prn, kind, start: a, end: b };
             let ff = run(&spec(Strategy::None, None, s, None)).map_err(|e| e.to_string())?;
             for (k, (cell, (_, strategy, gan))) in row.iter_mut().zip(methods).enumerate() {
                 let t = Instant::now();
@@ -249,14 +202,7 @@ fn table5(mut args: impl Iterator<Item = String>) -> Result<(), String> {
     );
     let names: Vec<&str> = methods.iter().map(|m| m.0).collect();
     println!("Delay: mean over the runs that flagged the faulty satellite in the section (how many of {runs} did) / mean counting a miss as 60 s. Missed: fraction of fault epochs in which the faulty satellite is not flagged.\n");
-    println!(
-        "| fault | {} | paper FDI/FDA/GAN-FDSR |",
-        names
-            .iter()
-            .map(|n| format!("{n} delay"))
-            .collect::<Vec<_>>()
-            .join(" | ")
-    );
+    println!("| fault | {} | paper FDI/FDA/GAN-FDSR |", names.iter().map(|n| format!("{n} delay")).collect::<Vec<_>>().join(" | "));
     println!("|---|{}---|", "---|".repeat(names.len()));
     let paper_d = ["0/0/0", "60/60/0", "18/18/3", "34/34/6", "54/54/9"];
     let paper_m = ["0/0/0%", "100/100/0%", "30/30/5%", "57/57/10%", "90/90/15%"];
@@ -264,30 +210,17 @@ fn table5(mut args: impl Iterator<Item = String>) -> Result<(), String> {
         let d: Vec<String> = row.iter().map(|c| fmt_delay(&c.delays)).collect();
         println!("| {} | {} | {p} |", kind.name(), d.join(" | "));
     }
-    println!(
-        "\n| fault | {} | paper FDI/FDA/GAN-FDSR |",
-        names
-            .iter()
-            .map(|n| format!("{n} missed"))
-            .collect::<Vec<_>>()
-            .join(" | ")
-    );
+    println!("\n| fault | {} | paper FDI/FDA/GAN-FDSR |", names.iter().map(|n| format!("{n} missed")).collect::<Vec<_>>().join(" | "));
     println!("|---|{}---|", "---|".repeat(names.len()));
     for ((kind, row), p) in FaultType::ALL.iter().zip(&cells).zip(paper_m) {
-        let m: Vec<String> = row
-            .iter()
-            .map(|c| format!("{:.0}%", 100.0 * mean(&c.missed)))
-            .collect();
+        let m: Vec<String> = row.iter().map(|c| format!("{:.0}%", 100.0 * mean(&c.missed))).collect();
         println!("| {} | {} | {p} |", kind.name(), m.join(" | "));
     }
     println!("\n### Figure 12: mean positioning error relative to fault-free in 300-360 s (m)\n");
     println!("| fault | {} |", names.join(" | "));
     println!("|---|{}", "---|".repeat(names.len()));
     for (kind, row) in FaultType::ALL.iter().zip(&cells) {
-        let e: Vec<String> = row
-            .iter()
-            .map(|c| format!("{:.2}", mean(&c.rel_err)))
-            .collect();
+        let e: Vec<String> = row.iter().map(|c| format!("{:.2}", mean(&c.rel_err))).collect();
         println!("| {} | {} |", kind.name(), e.join(" | "));
     }
     // Fault-free false alarms.
@@ -338,24 +271,11 @@ fn fmt_delay(d: &[Option<f64>]) -> String {
     if hit.is_empty() {
         format!("- (0/{}) / 60", d.len())
     } else {
-        format!(
-            "{:.1} ({}/{}) / {:.1}",
-            mean(&hit),
-            hit.len(),
-            d.len(),
-            mean(&all)
-        )
+        format!("{:.1} ({}/{}) / {:.1}", mean(&hit), hit.len(), d.len(), mean(&all))
     }
 }
 
 fn rel_error(ff: &RunRecord, r: &RunRecord, a: f64, b: f64) -> f64 {
-    let d: Vec<f64> = r
-        .pos_err
-        .iter()
-        .zip(&ff.pos_err)
-        .zip(&r.t)
-        .filter(|(_, &t)| t >= a && t < b)
-        .map(|((x, y), _)| x - y)
-        .collect();
+    let d: Vec<f64> = r.pos_err.iter().zip(&ff.pos_err).zip(&r.t).filter(|(_, &t)| t >= a && t < b).map(|((x, y), _)| x - y).collect();
     mean(&d)
 }

@@ -38,11 +38,7 @@ fn battery() -> Vec<Scenario> {
             v.push(Scenario::with_fault(*kind, *m, start, 15.0, next()));
         }
     }
-    for tr in [
-        Trajectory::Paper,
-        Trajectory::Aggressive,
-        Trajectory::Survey,
-    ] {
+    for tr in [Trajectory::Paper, Trajectory::Aggressive, Trajectory::Survey] {
         v.push(Scenario::clean(tr, next(), 250.0));
     }
     let mut g = Scenario::paper(OutageMode::Degraded, next());
@@ -91,26 +87,14 @@ fn main() {
                 // their R comes from a slow consistency test alone (the baro's
                 // or the IMU's, 2-3 above clean at onset), and as D2 samples
                 // they pull the decision boundary down into the range real GPS
-                // logs reach (with accel-bias trained on, the 0.5 m/s ramp's
-                // false alarms went from 23 to 96 on seed 1). Both are
-                // detected by the same boundary without being trained on.
-                // The IMU test's 3 s window (and the bias the filter absorbed)
-                // also outlasts an accel-bias fault by a few seconds: those
-                // epochs are neither clean examples nor fault ones.
-                for f in sc
-                    .faults
-                    .iter()
-                    .filter(|f| matches!(f.kind, FaultKind::BaroStuck | FaultKind::AccelBias))
-                {
-                    let tail = if f.kind == FaultKind::AccelBias {
-                        10.0
-                    } else {
-                        0.0
-                    };
-                    for r in rows
-                        .iter_mut()
-                        .filter(|r| r.label >= 0.5 || (r.t >= f.end && r.t < f.end + tail))
-                    {
+                // logs reach. Both are detected by the same boundary without
+                // being trained on (README, Known gaps). The IMU test's 3 s
+                // window (and the bias the filter absorbed) also outlasts an
+                // accel-bias fault by a few seconds: those epochs are neither
+                // clean examples nor fault ones.
+                for f in sc.faults.iter().filter(|f| matches!(f.kind, FaultKind::BaroStuck | FaultKind::AccelBias)) {
+                    let tail = if f.kind == FaultKind::AccelBias { 10.0 } else { 0.0 };
+                    for r in rows.iter_mut().filter(|r| r.label >= 0.5 || (r.t >= f.end && r.t < f.end + tail)) {
                         r.label = f64::NAN;
                     }
                 }

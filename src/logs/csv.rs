@@ -47,10 +47,7 @@ impl CsvReader {
         }
         if start < chunk.len() {
             if self.partial.len() + (chunk.len() - start) > 1 << 20 {
-                return Err(format!(
-                    "line {}: longer than 1 MiB (not a navlog CSV?)",
-                    self.line_no + 1
-                ));
+                return Err(format!("line {}: longer than 1 MiB (not a navlog CSV?)", self.line_no + 1));
             }
             self.partial.extend_from_slice(&chunk[start..]);
         }
@@ -73,13 +70,8 @@ impl CsvReader {
         self.line_no += 1;
         let ln = self.line_no;
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        let text = core::str::from_utf8(raw)
-            .map_err(|_| format!("line {ln}: not UTF-8 text (binary file?)"))?;
-        let text = if ln == 1 {
-            text.trim_start_matches('\u{feff}')
-        } else {
-            text
-        };
+        let text = core::str::from_utf8(raw).map_err(|_| format!("line {ln}: not UTF-8 text (binary file?)"))?;
+        let text = if ln == 1 { text.trim_start_matches('\u{feff}') } else { text };
         if text.trim().is_empty() {
             return Ok(());
         }
@@ -96,20 +88,12 @@ impl CsvReader {
         let mut n = 0;
         for (j, cell) in text.split(',').enumerate() {
             n = j + 1;
-            let Some(Some(idx)) = map.get(j) else {
-                continue;
-            };
+            let Some(Some(idx)) = map.get(j) else { continue };
             let cell = cell.trim();
             if cell.is_empty() {
                 continue;
             }
-            let v: f64 = cell.parse().map_err(|_| {
-                format!(
-                    "line {ln}, column '{}': cannot parse \"{}\" as a number",
-                    COLUMNS[*idx],
-                    truncate(cell)
-                )
-            })?;
+            let v: f64 = cell.parse().map_err(|_| format!("line {ln}, column '{}': cannot parse \"{}\" as a number", COLUMNS[*idx], truncate(cell)))?;
             s.set(*idx, v);
         }
         if n != map.len() {
@@ -143,16 +127,11 @@ impl CsvReader {
             }
         }
         if !seen[0] {
-            let hint = if text.contains(';') || text.contains('\t') {
-                " (the delimiter must be a comma)"
-            } else {
-                ""
-            };
+            let hint = if text.contains(';') || text.contains('\t') { " (the delimiter must be a comma)" } else { "" };
             return Err(format!("header: no 't' column{hint}"));
         }
         if !unknown.is_empty() {
-            self.warnings
-                .push(format!("unknown columns ignored: {}", unknown.join(", ")));
+            self.warnings.push(format!("unknown columns ignored: {}", unknown.join(", ")));
         }
         self.map = Some(map);
         Ok(())
@@ -182,21 +161,8 @@ pub fn read_csv(bytes: &[u8]) -> Result<LogData, String> {
     if !rows.iter().any(|s| s.has_baro()) {
         missing.push("baro".to_string());
     }
-    let meta = r
-        .comments
-        .iter()
-        .take(8)
-        .enumerate()
-        .map(|(i, c)| (format!("comment{i}"), c.clone()))
-        .collect();
-    Ok(LogData {
-        format: "csv",
-        samples: rows,
-        meta,
-        warnings: r.warnings,
-        missing,
-        topic_counts: vec![],
-    })
+    let meta = r.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
+    Ok(LogData { format: "csv", samples: rows, meta, warnings: r.warnings, missing, topic_counts: vec![] })
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]
@@ -225,11 +191,7 @@ mod tests {
             r.feed(&text.as_bytes()[..cut], &mut rows).unwrap();
             r.feed(&text.as_bytes()[cut..], &mut rows).unwrap();
             r.finish(&mut rows).unwrap();
-            let bits = |v: &[Sample]| -> Vec<Vec<u64>> {
-                v.iter()
-                    .map(|s| (0..COLUMNS.len()).map(|i| s.get(i).to_bits()).collect())
-                    .collect()
-            };
+            let bits = |v: &[Sample]| -> Vec<Vec<u64>> { v.iter().map(|s| (0..COLUMNS.len()).map(|i| s.get(i).to_bits()).collect()).collect() };
             assert_eq!(bits(&rows), bits(&whole), "cut at {cut}");
         }
     }
@@ -237,10 +199,7 @@ mod tests {
     #[test]
     fn errors_name_line_and_column() {
         let e = read_csv(b"t,lat\n0,abc\n").unwrap_err();
-        assert!(
-            e.contains("line 2") && e.contains("'lat'") && e.contains("abc"),
-            "{e}"
-        );
+        assert!(e.contains("line 2") && e.contains("'lat'") && e.contains("abc"), "{e}");
         let e = read_csv(b"t;lat;lon\n0;1;2\n").unwrap_err();
         assert!(e.contains("delimiter"), "{e}");
         assert!(read_csv(b"").unwrap_err().contains("no header"));

@@ -32,6 +32,5 @@ pub fn read_any(bytes: &[u8]) -> Result<LogData, String> {
     if dataflash::is_dataflash(bytes) {
         return dataflash::read_dataflash(bytes);
     }
-    csv::read_csv(bytes)
-        .map_err(|e| format!("not a ULog or DataFlash log, and not a navlog CSV: {e}"))
+    csv::read_csv(bytes).map_err(|e| format!("not a ULog or DataFlash log, and not a navlog CSV: {e}"))
 }

@@ -44,17 +44,11 @@ fn check_series(field: &str, r: &[f64], min_len: usize) -> Result<(), TightError
     if r.len() < min_len {
         return Err(TightError::new(
             field,
-            format!(
-                "series too short: {} samples, need at least {min_len}",
-                r.len()
-            ),
+            format!("series too short: {} samples, need at least {min_len}", r.len()),
         ));
     }
     if let Some((i, v)) = r.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(TightError::new(
-            field,
-            format!("sample {i} must be finite, got {v}"),
-        ));
+        return Err(TightError::new(field, format!("sample {i} must be finite, got {v}")));
     }
     Ok(())
 }
@@ -63,10 +57,7 @@ fn check_dt(dt: f64) -> Result<f64, TightError> {
     if dt.is_finite() && dt > 0.0 {
         Ok(dt)
     } else {
-        Err(TightError::new(
-            "dt",
-            format!("sample period must be finite and > 0 s, got {dt}"),
-        ))
+        Err(TightError::new("dt", format!("sample period must be finite and > 0 s, got {dt}")))
     }
 }
 
@@ -85,11 +76,7 @@ pub fn increment_difference(rho_g: &[f64], rho_i: &[f64]) -> Result<Vec<f64>, Ti
     if rho_g.len() != rho_i.len() {
         return Err(TightError::new(
             "rho_i",
-            format!(
-                "length {} differs from rho_g length {}",
-                rho_i.len(),
-                rho_g.len()
-            ),
+            format!("length {} differs from rho_g length {}", rho_i.len(), rho_g.len()),
         ));
     }
     check_series("rho_g", rho_g, 2)?;
@@ -146,26 +133,17 @@ fn cell(x: f64, lo: f64, span: f64, bins: usize) -> usize {
 pub fn mutual_information(r: &[f64], tau: usize, bins: usize) -> Result<f64, TightError> {
     check_series("r", r, 2)?;
     if !(2..=MAX_BINS).contains(&bins) {
-        return Err(TightError::new(
-            "bins",
-            format!("β must be in 2..={MAX_BINS}, got {bins}"),
-        ));
+        return Err(TightError::new("bins", format!("β must be in 2..={MAX_BINS}, got {bins}")));
     }
     if tau == 0 || tau > r.len() - 2 {
         return Err(TightError::new(
             "tau",
-            format!(
-                "delay must be in 1..={} samples for N = {}, got {tau}",
-                r.len() - 2,
-                r.len()
-            ),
+            format!("delay must be in 1..={} samples for N = {}, got {tau}", r.len() - 2, r.len()),
         ));
     }
-    let (lo, hi) = r
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
-            (lo.min(x), hi.max(x))
-        });
+    let (lo, hi) = r.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+        (lo.min(x), hi.max(x))
+    });
     let span = hi - lo;
     if !(span.is_finite() && span > 0.0) {
         // Constant series (or a range that overflows f64): no information.
@@ -234,11 +212,7 @@ pub fn delay_by_mutual_information(
     if max_tau < 2 || max_tau > r.len() - 2 {
         return Err(TightError::new(
             "max_tau",
-            format!(
-                "must be in 2..={} for N = {}, got {max_tau}",
-                r.len() - 2,
-                r.len()
-            ),
+            format!("must be in 2..={} for N = {}, got {max_tau}", r.len() - 2, r.len()),
         ));
     }
     let mut curve = Vec::with_capacity(max_tau);
@@ -262,11 +236,7 @@ pub fn delay_by_mutual_information(
             (best + 1, false)
         }
     };
-    Ok(DelayEstimate {
-        tau,
-        curve,
-        found_minimum,
-    })
+    Ok(DelayEstimate { tau, curve, found_minimum })
 }
 
 // ---------------------------------------------------------------------------
@@ -290,9 +260,7 @@ impl PhaseSpace {
     /// Phase point i (length m); an empty slice if `i ≥ rows`.
     pub fn row(&self, i: usize) -> &[f64] {
         let start = i.saturating_mul(self.m);
-        self.data
-            .get(start..start.saturating_add(self.m))
-            .unwrap_or(&[])
+        self.data.get(start..start.saturating_add(self.m)).unwrap_or(&[])
     }
 }
 
@@ -308,10 +276,7 @@ fn n_vectors(n: usize, m: usize, tau: usize) -> Option<usize> {
 pub fn embed(r: &[f64], m: usize, tau: usize) -> Result<PhaseSpace, TightError> {
     check_series("r", r, 1)?;
     if m == 0 {
-        return Err(TightError::new(
-            "m",
-            "embedding dimension must be ≥ 1, got 0",
-        ));
+        return Err(TightError::new("m", "embedding dimension must be ≥ 1, got 0"));
     }
     if tau == 0 {
         return Err(TightError::new("tau", "delay must be ≥ 1 sample, got 0"));
@@ -319,10 +284,7 @@ pub fn embed(r: &[f64], m: usize, tau: usize) -> Result<PhaseSpace, TightError> 
     let rows = n_vectors(r.len(), m, tau).ok_or_else(|| {
         TightError::new(
             "m",
-            format!(
-                "(m − 1)τ = ({m} − 1)·{tau} leaves no delay vector in {} samples",
-                r.len()
-            ),
+            format!("(m − 1)τ = ({m} − 1)·{tau} leaves no delay vector in {} samples", r.len()),
         )
     })?;
     let mut data = Vec::with_capacity(rows * m);
@@ -363,10 +325,7 @@ impl<'a> Neighbours<'a> {
     fn new(r: &'a [f64]) -> Self {
         let mut order: Vec<usize> = (0..r.len()).collect();
         order.sort_by(|&a, &b| {
-            let (x, y) = (
-                r.get(a).copied().unwrap_or(0.0),
-                r.get(b).copied().unwrap_or(0.0),
-            );
+            let (x, y) = (r.get(a).copied().unwrap_or(0.0), r.get(b).copied().unwrap_or(0.0));
             x.total_cmp(&y).then(a.cmp(&b))
         });
         let mut pos = vec![0; r.len()];
@@ -523,10 +482,7 @@ pub fn cao(r: &[f64], tau: usize, max_m: usize) -> Result<CaoResult, TightError>
         return Err(TightError::new("tau", "delay must be ≥ 1 sample, got 0"));
     }
     if max_m < 2 {
-        return Err(TightError::new(
-            "max_m",
-            format!("must be ≥ 2, got {max_m}"),
-        ));
+        return Err(TightError::new("max_m", format!("must be ≥ 2, got {max_m}")));
     }
     // E(d) up to d = max_m + 1 needs N − (max_m + 1)τ points; ask for 10.
     let need = (max_m + 1).checked_mul(tau).and_then(|w| w.checked_add(10));
@@ -715,10 +671,7 @@ pub fn largest_lyapunov_fit(
 ) -> Result<LyapunovResult, TightError> {
     check_dt(dt)?;
     if steps < 2 {
-        return Err(TightError::new(
-            "steps",
-            format!("must be ≥ 2, got {steps}"),
-        ));
+        return Err(TightError::new("steps", format!("must be ≥ 2, got {steps}")));
     }
     if fit.end > steps || fit.end < fit.start.saturating_add(2) {
         return Err(TightError::new(
@@ -729,11 +682,8 @@ pub fn largest_lyapunov_fit(
     let ps = embed(r, m, tau)?;
     let period = mean_period(r)?;
     let window = libm::ceil(period);
-    let limit = ps
-        .rows
-        .checked_sub(steps - 1)
-        .filter(|&l| (l as f64) > window + 1.0)
-        .ok_or_else(|| {
+    let limit = ps.rows.checked_sub(steps - 1).filter(|&l| (l as f64) > window + 1.0).ok_or_else(
+        || {
             TightError::new(
                 "steps",
                 format!(
@@ -742,7 +692,8 @@ pub fn largest_lyapunov_fit(
                     ps.rows
                 ),
             )
-        })?;
+        },
+    )?;
     let nb = Neighbours::new(r);
     let mut pairs = Vec::new();
     for j in 0..limit {
@@ -752,10 +703,7 @@ pub fn largest_lyapunov_fit(
         }
     }
     if pairs.is_empty() {
-        return Err(TightError::new(
-            "r",
-            "no neighbour pair found beyond the mean period",
-        ));
+        return Err(TightError::new("r", "no neighbour pair found beyond the mean period"));
     }
     let mut curve = Vec::with_capacity(steps);
     for i in 0..steps {
@@ -769,15 +717,10 @@ pub fn largest_lyapunov_fit(
         }
         curve.push(if q > 0 { s / q as f64 / dt } else { f64::NAN });
     }
-    let exponent = slope(&curve, fit.clone())
-        .ok_or_else(|| TightError::new("fit", format!("no finite points to fit in {fit:?}")))?;
-    Ok(LyapunovResult {
-        exponent,
-        curve,
-        mean_period: period,
-        pairs: pairs.len(),
-        fit,
-    })
+    let exponent = slope(&curve, fit.clone()).ok_or_else(|| {
+        TightError::new("fit", format!("no finite points to fit in {fit:?}"))
+    })?;
+    Ok(LyapunovResult { exponent, curve, mean_period: period, pairs: pairs.len(), fit })
 }
 
 /// Least-squares slope of y against its index over `range` (finite y only).
@@ -823,13 +766,7 @@ impl Default for ChaosOptions {
     /// Sized for the paper's 1 Hz pseudo-range series (τ ≈ 5–10 s,
     /// m ≈ 9–11 in Table 1).
     fn default() -> Self {
-        ChaosOptions {
-            bins: None,
-            max_tau: 30,
-            max_m: 12,
-            lyapunov_steps: 10,
-            lyapunov_fit: None,
-        }
+        ChaosOptions { bins: None, max_tau: 30, max_m: 12, lyapunov_steps: 10, lyapunov_fit: None }
     }
 }
 
@@ -937,11 +874,7 @@ mod tests {
     /// Lorenz x sampled every `every` RK4 steps of 0.01 s after 20 s.
     fn lorenz(n: usize, every: usize) -> Vec<f64> {
         let f = |s: [f64; 3]| {
-            [
-                10.0 * (s[1] - s[0]),
-                s[0] * (28.0 - s[2]) - s[1],
-                s[0] * s[1] - 8.0 / 3.0 * s[2],
-            ]
+            [10.0 * (s[1] - s[0]), s[0] * (28.0 - s[2]) - s[1], s[0] * s[1] - 8.0 / 3.0 * s[2]]
         };
         let h = 0.01;
         let mut s = [1.0, 1.0, 1.0];
@@ -965,9 +898,7 @@ mod tests {
     }
 
     fn sine(n: usize, period: f64) -> Vec<f64> {
-        (0..n)
-            .map(|k| (2.0 * core::f64::consts::PI * k as f64 / period).sin())
-            .collect()
+        (0..n).map(|k| (2.0 * core::f64::consts::PI * k as f64 / period).sin()).collect()
     }
 
     fn field(e: TightError) -> String {
@@ -983,14 +914,8 @@ mod tests {
         for (a, b) in d.iter().zip([1.0, 3.0, -3.0]) {
             assert_relative_eq!(*a, b);
         }
-        assert_eq!(
-            field(increment_difference(&g, &i[..3]).unwrap_err()),
-            "rho_i"
-        );
-        assert_eq!(
-            field(increment_difference(&[1.0], &[1.0]).unwrap_err()),
-            "rho_g"
-        );
+        assert_eq!(field(increment_difference(&g, &i[..3]).unwrap_err()), "rho_i");
+        assert_eq!(field(increment_difference(&[1.0], &[1.0]).unwrap_err()), "rho_g");
         let e = increment_difference(&g, &[0.0, f64::NAN, 1.0, 2.0]).unwrap_err();
         assert_eq!(e.field, "rho_i");
         assert!(e.message.contains("sample 1"), "{}", e.message);
@@ -1001,16 +926,8 @@ mod tests {
         // Period-2 square wave: r(t + τ) determines r(t) exactly, two
         // equiprobable states (an even number N − τ of pairs) → E = ln 2.
         let sq: Vec<f64> = (0..104).map(|k| (k % 2) as f64).collect();
-        assert_relative_eq!(
-            mutual_information(&sq[..101], 1, 2).unwrap(),
-            2f64.ln(),
-            epsilon = 1e-12
-        );
-        assert_relative_eq!(
-            mutual_information(&sq, 4, 8).unwrap(),
-            2f64.ln(),
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(mutual_information(&sq[..101], 1, 2).unwrap(), 2f64.ln(), epsilon = 1e-12);
+        assert_relative_eq!(mutual_information(&sq, 4, 8).unwrap(), 2f64.ln(), epsilon = 1e-12);
         // Constant: nothing to learn.
         assert_eq!(mutual_information(&[3.0; 50], 2, 10).unwrap(), 0.0);
         // Sine: a quarter period decorrelates; τ = 1 nearly copies.
@@ -1024,16 +941,10 @@ mod tests {
         let d = delay_by_mutual_information(&s, 16, 20).unwrap();
         assert!(d.found_minimum && (5..=15).contains(&d.tau), "{d:?}");
         assert_eq!(field(mutual_information(&s, 1, 1).unwrap_err()), "bins");
-        assert_eq!(
-            field(mutual_information(&s, 1, MAX_BINS + 1).unwrap_err()),
-            "bins"
-        );
+        assert_eq!(field(mutual_information(&s, 1, MAX_BINS + 1).unwrap_err()), "bins");
         assert_eq!(field(mutual_information(&s, 0, 16).unwrap_err()), "tau");
         assert_eq!(field(mutual_information(&s, 1999, 16).unwrap_err()), "tau");
-        assert_eq!(
-            field(mutual_information(&[1.0, f64::INFINITY, 2.0], 1, 2).unwrap_err()),
-            "r"
-        );
+        assert_eq!(field(mutual_information(&[1.0, f64::INFINITY, 2.0], 1, 2).unwrap_err()), "r");
     }
 
     #[test]
@@ -1086,10 +997,7 @@ mod tests {
         // ln d(i) is linear for ~10 iterations before saturating at the
         // attractor size (d(0) ≈ e^-6); fit the first 8.
         let ly = largest_lyapunov_fit(&x, 2, 1, 1.0, 12, 0..8).unwrap();
-        println!(
-            "Hénon λ = {:.4} /iter, P = {:.2}",
-            ly.exponent, ly.mean_period
-        );
+        println!("Hénon λ = {:.4} /iter, P = {:.2}", ly.exponent, ly.mean_period);
         assert_relative_eq!(ly.exponent, 0.419, epsilon = 0.06);
         let c = cao(&x, 1, 6).unwrap();
         println!("Hénon Cao {c:?}");
@@ -1101,12 +1009,7 @@ mod tests {
         let dt = 0.01;
         let x = lorenz(10_000, 1);
         let d = delay_by_mutual_information(&x, default_bins(x.len()), 40).unwrap();
-        println!(
-            "Lorenz τ = {} samples ({} s), minimum found {}",
-            d.tau,
-            d.tau as f64 * dt,
-            d.found_minimum
-        );
+        println!("Lorenz τ = {} samples ({} s), minimum found {}", d.tau, d.tau as f64 * dt, d.found_minimum);
         assert!(d.found_minimum);
         assert!((12..=20).contains(&d.tau), "τ = {}", d.tau);
         assert_eq!(d.curve.len(), 40);
@@ -1116,10 +1019,7 @@ mod tests {
         assert_eq!(short.tau, 6);
 
         let c = cao(&x, d.tau, 8).unwrap();
-        println!(
-            "Lorenz Cao dimension {} E1 {:.3?} E2 {:.3?}",
-            c.dimension, c.e1, c.e2
-        );
+        println!("Lorenz Cao dimension {} E1 {:.3?} E2 {:.3?}", c.dimension, c.e1, c.e2);
         assert!((2..=5).contains(&c.dimension), "m = {}", c.dimension);
         assert!(c.e2[0] < 0.5 && c.e2[1] < 0.9, "E2 = {:?}", c.e2);
 
@@ -1127,10 +1027,7 @@ mod tests {
         // aligning with the unstable direction, local slope ≈ 1.8/s) and
         // before saturation near 3.5 s. Fit 0.5–2.5 s.
         let ly = largest_lyapunov_fit(&x, 3, d.tau, dt, 300, 50..250).unwrap();
-        println!(
-            "Lorenz λ = {:.4} /s, P = {:.1} samples, {} pairs",
-            ly.exponent, ly.mean_period, ly.pairs
-        );
+        println!("Lorenz λ = {:.4} /s, P = {:.1} samples, {} pairs", ly.exponent, ly.mean_period, ly.pairs);
         assert_relative_eq!(ly.exponent, 0.906, epsilon = 0.2);
         let early = slope(&ly.curve, 0..50).unwrap();
         println!("Lorenz slope over 0–0.5 s = {early:.3} /s");
@@ -1166,15 +1063,9 @@ mod tests {
     #[test]
     fn cao_skips_zero_distances() {
         // Quantised series with many exact repeats must still work.
-        let x: Vec<f64> = henon(1500)
-            .iter()
-            .map(|v| (v * 20.0).round() / 20.0)
-            .collect();
+        let x: Vec<f64> = henon(1500).iter().map(|v| (v * 20.0).round() / 20.0).collect();
         let c = cao(&x, 1, 4).unwrap();
-        assert!(
-            c.e1.iter().chain(&c.e2).all(|v| v.is_finite() && *v > 0.0),
-            "{c:?}"
-        );
+        assert!(c.e1.iter().chain(&c.e2).all(|v| v.is_finite() && *v > 0.0), "{c:?}");
         assert_eq!(field(cao(&x, 0, 4).unwrap_err()), "tau");
         assert_eq!(field(cao(&x, 1, 1).unwrap_err()), "max_m");
         assert_eq!(field(cao(&x[..20], 5, 4).unwrap_err()), "r");
@@ -1183,30 +1074,12 @@ mod tests {
     #[test]
     fn lyapunov_parameter_errors() {
         let x = henon(300);
-        assert_eq!(
-            field(largest_lyapunov(&x, 2, 1, 0.0, 10).unwrap_err()),
-            "dt"
-        );
-        assert_eq!(
-            field(largest_lyapunov(&x, 2, 1, f64::NAN, 10).unwrap_err()),
-            "dt"
-        );
-        assert_eq!(
-            field(largest_lyapunov(&x, 2, 1, 1.0, 1).unwrap_err()),
-            "steps"
-        );
-        assert_eq!(
-            field(largest_lyapunov(&x, 2, 1, 1.0, 400).unwrap_err()),
-            "steps"
-        );
-        assert_eq!(
-            field(largest_lyapunov_fit(&x, 2, 1, 1.0, 10, 3..4).unwrap_err()),
-            "fit"
-        );
-        assert_eq!(
-            field(largest_lyapunov_fit(&x, 2, 1, 1.0, 10, 5..11).unwrap_err()),
-            "fit"
-        );
+        assert_eq!(field(largest_lyapunov(&x, 2, 1, 0.0, 10).unwrap_err()), "dt");
+        assert_eq!(field(largest_lyapunov(&x, 2, 1, f64::NAN, 10).unwrap_err()), "dt");
+        assert_eq!(field(largest_lyapunov(&x, 2, 1, 1.0, 1).unwrap_err()), "steps");
+        assert_eq!(field(largest_lyapunov(&x, 2, 1, 1.0, 400).unwrap_err()), "steps");
+        assert_eq!(field(largest_lyapunov_fit(&x, 2, 1, 1.0, 10, 3..4).unwrap_err()), "fit");
+        assert_eq!(field(largest_lyapunov_fit(&x, 2, 1, 1.0, 10, 5..11).unwrap_err()), "fit");
         assert_eq!(field(largest_lyapunov(&x, 0, 1, 1.0, 10).unwrap_err()), "m");
     }
 
@@ -1221,37 +1094,19 @@ mod tests {
             ..ChaosOptions::default()
         };
         let c = analyze(&x, 0.02, &opts).unwrap();
-        println!(
-            "analyze Lorenz: τ {} m {} λ {:.4} P {:.1} β {}",
-            c.tau, c.m, c.lyapunov, c.mean_period, c.bins
-        );
+        println!("analyze Lorenz: τ {} m {} λ {:.4} P {:.1} β {}", c.tau, c.m, c.lyapunov, c.mean_period, c.bins);
         assert!((6..=10).contains(&c.tau), "τ = {}", c.tau);
         assert!((2..=5).contains(&c.m), "m = {}", c.m);
         assert_relative_eq!(c.lyapunov, 0.906, epsilon = 0.25);
-        assert_eq!(
-            (c.e1.len(), c.e2.len(), c.lyapunov_curve.len()),
-            (8, 8, 150)
-        );
+        assert_eq!((c.e1.len(), c.e2.len(), c.lyapunov_curve.len()), (8, 8, 150));
         let t = table1_markdown(&[("G8".into(), c.clone()), ("a|b".into(), c.clone())]);
         let lines: Vec<&str> = t.lines().collect();
         assert_eq!(lines.len(), 4);
-        let (lo, hi) = (
-            c.e2.iter().copied().fold(f64::INFINITY, f64::min),
-            c.e2.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        );
-        assert_eq!(
-            lines[2],
-            format!(
-                "| G8 | {} | {} | {:.4} | {lo:.2}–{hi:.2} |",
-                c.tau, c.m, c.lyapunov
-            )
-        );
+        let (lo, hi) = (c.e2.iter().copied().fold(f64::INFINITY, f64::min), c.e2.iter().copied().fold(f64::NEG_INFINITY, f64::max));
+        assert_eq!(lines[2], format!("| G8 | {} | {} | {:.4} | {lo:.2}–{hi:.2} |", c.tau, c.m, c.lyapunov));
         assert!(lines[3].starts_with("| a\\|b |"));
         assert_eq!(field(analyze(&x, -1.0, &opts).unwrap_err()), "dt");
-        let bad = ChaosOptions {
-            lyapunov_fit: Some(0..151),
-            ..opts.clone()
-        };
+        let bad = ChaosOptions { lyapunov_fit: Some(0..151), ..opts.clone() };
         assert_eq!(field(analyze(&x, 0.02, &bad).unwrap_err()), "lyapunov_fit");
     }
 

@@ -70,10 +70,7 @@ impl Constellation {
     /// successive planes are offset by 15° so that planes do not align.
     pub fn gps_like(n: usize) -> Result<Self, TightError> {
         if !(24..=31).contains(&n) {
-            return Err(TightError::new(
-                "n_sats",
-                format!("must be 24..=31, got {n}"),
-            ));
+            return Err(TightError::new("n_sats", format!("must be 24..=31, got {n}")));
         }
         let two_pi = 2.0 * core::f64::consts::PI;
         let mut orbits = Vec::with_capacity(n);
@@ -101,10 +98,7 @@ impl Constellation {
 
     /// Satellite positions in the site's NED frame (m) at time `t`.
     pub fn positions_ned(&self, site: &Site, t: f64) -> Vec<(u8, Vector3<f64>)> {
-        self.orbits
-            .iter()
-            .map(|o| (o.prn, site.ecef_to_ned(&o.position_ecef(t))))
-            .collect()
+        self.orbits.iter().map(|o| (o.prn, site.ecef_to_ned(&o.position_ecef(t)))).collect()
     }
 
     /// Satellites above `mask` (rad) seen from NED point `p` at time `t`,
@@ -115,12 +109,7 @@ impl Constellation {
             .into_iter()
             .filter_map(|(prn, s)| {
                 let (el, az) = elevation_azimuth(p, &s);
-                (el >= mask).then_some(SatView {
-                    prn,
-                    elevation: el,
-                    azimuth: az,
-                    pos_ned: s,
-                })
+                (el >= mask).then_some(SatView { prn, elevation: el, azimuth: az, pos_ned: s })
             })
             .collect();
         v.sort_by(|a, b| b.elevation.total_cmp(&a.elevation));
@@ -154,47 +143,25 @@ pub struct Site {
 impl Site {
     pub fn new(lat_deg: f64, lon_deg: f64, alt_m: f64) -> Result<Self, TightError> {
         if !(lat_deg.is_finite() && (-90.0..=90.0).contains(&lat_deg)) {
-            return Err(TightError::new(
-                "lat",
-                format!("must be in [-90, 90] deg, got {lat_deg}"),
-            ));
+            return Err(TightError::new("lat", format!("must be in [-90, 90] deg, got {lat_deg}")));
         }
         if !(lon_deg.is_finite() && (-180.0..=360.0).contains(&lon_deg)) {
-            return Err(TightError::new(
-                "lon",
-                format!("must be in [-180, 360] deg, got {lon_deg}"),
-            ));
+            return Err(TightError::new("lon", format!("must be in [-180, 360] deg, got {lon_deg}")));
         }
         if !(alt_m.is_finite() && alt_m.abs() < 1.0e5) {
-            return Err(TightError::new(
-                "alt",
-                format!("must be finite and |alt| < 100 km, got {alt_m}"),
-            ));
+            return Err(TightError::new("alt", format!("must be finite and |alt| < 100 km, got {alt_m}")));
         }
         let (phi, lam) = (lat_deg.to_radians(), lon_deg.to_radians());
-        let (sp, cp, sl, cl) = (
-            libm::sin(phi),
-            libm::cos(phi),
-            libm::sin(lam),
-            libm::cos(lam),
-        );
+        let (sp, cp, sl, cl) = (libm::sin(phi), libm::cos(phi), libm::sin(lam), libm::cos(lam));
         let rn = WGS84_A / libm::sqrt(1.0 - WGS84_E2 * sp * sp);
-        let ecef = Vector3::new(
-            (rn + alt_m) * cp * cl,
-            (rn + alt_m) * cp * sl,
-            (rn * (1.0 - WGS84_E2) + alt_m) * sp,
-        );
+        let ecef = Vector3::new((rn + alt_m) * cp * cl, (rn + alt_m) * cp * sl, (rn * (1.0 - WGS84_E2) + alt_m) * sp);
         #[rustfmt::skip]
         let c_ne = Matrix3::new(
             -sp * cl, -sp * sl,  cp,
             -sl,       cl,       0.0,
             -cp * cl, -cp * sl, -sp,
         );
-        Ok(Site {
-            lla: (lat_deg, lon_deg, alt_m),
-            ecef,
-            c_ne,
-        })
+        Ok(Site { lla: (lat_deg, lon_deg, alt_m), ecef, c_ne })
     }
 
     pub fn ecef_to_ned(&self, e: &Vector3<f64>) -> Vector3<f64> {
@@ -274,11 +241,7 @@ mod tests {
         let o = &c.orbits[0];
         // Inertial radius is constant; ECEF norm equals it (rotation about z).
         for t in [0.0, 1000.0, 20000.0] {
-            assert_relative_eq!(
-                o.position_ecef(t).norm(),
-                ORBIT_RADIUS,
-                max_relative = 1e-12
-            );
+            assert_relative_eq!(o.position_ecef(t).norm(), ORBIT_RADIUS, max_relative = 1e-12);
         }
         // Period 2π sqrt(a³/μ) ≈ 11 h 58 min.
         let period = 2.0 * core::f64::consts::PI * (ORBIT_RADIUS.powi(3) / MU).sqrt();
@@ -295,8 +258,7 @@ mod tests {
         for n in 24..=31 {
             let c = Constellation::gps_like(n).unwrap();
             assert_eq!(c.orbits.len(), n);
-            let planes: std::collections::BTreeSet<u64> =
-                c.orbits.iter().map(|o| o.raan.to_bits()).collect();
+            let planes: std::collections::BTreeSet<u64> = c.orbits.iter().map(|o| o.raan.to_bits()).collect();
             assert_eq!(planes.len(), 6);
         }
     }

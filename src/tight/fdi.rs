@@ -37,10 +37,7 @@ pub fn normal_upper_quantile(p: f64) -> Result<f64, TightError> {
 /// at false-alarm rate `α` (α = 0.001 gives 3.29).
 pub fn threshold_t1(alpha: f64) -> Result<f64, TightError> {
     if !(alpha > 0.0 && alpha < 1.0) {
-        return Err(TightError::new(
-            "alpha",
-            format!("must be in (0, 1), got {alpha}"),
-        ));
+        return Err(TightError::new("alpha", format!("must be in (0, 1), got {alpha}")));
     }
     normal_upper_quantile(alpha / 2.0)
 }
@@ -49,10 +46,7 @@ pub fn threshold_t1(alpha: f64) -> Result<f64, TightError> {
 /// Wilson–Hilferty approximation (relative error < 1 % for k ≥ 3).
 pub fn chi2_quantile(p: f64, k: f64) -> Result<f64, TightError> {
     if !(k > 0.0 && k.is_finite()) {
-        return Err(TightError::new(
-            "k",
-            format!("must be finite and > 0, got {k}"),
-        ));
+        return Err(TightError::new("k", format!("must be finite and > 0, got {k}")));
     }
     let z = -normal_upper_quantile(p)?;
     let a = 2.0 / (9.0 * k);
@@ -92,11 +86,7 @@ pub fn detect(lambdas: &DVector<f64>, prns: &[u8], t1: f64) -> Option<Detection>
     for (i, &l) in lambdas.iter().enumerate() {
         if l.abs() > best_abs {
             best_abs = l.abs();
-            best = Some(Detection {
-                index: i,
-                prn: prns[i],
-                lambda: l,
-            });
+            best = Some(Detection { index: i, prn: prns[i], lambda: l });
         }
     }
     best
@@ -209,13 +199,7 @@ pub struct FilterPredictor {
 
 impl FilterPredictor {
     pub fn new(base_variance: f64) -> Self {
-        FilterPredictor {
-            smoothing: 0.2,
-            base_variance,
-            sigma_rate: 0.5,
-            max_age: 120.0,
-            history: BTreeMap::new(),
-        }
+        FilterPredictor { smoothing: 0.2, base_variance, sigma_rate: 0.5, max_age: 120.0, history: BTreeMap::new() }
     }
 }
 
@@ -233,10 +217,7 @@ impl RangePredictor for FilterPredictor {
             return None;
         }
         let s = self.sigma_rate * age;
-        Some(Reconstruction {
-            pr: predicted + off,
-            variance: self.base_variance + s * s,
-        })
+        Some(Reconstruction { pr: predicted + off, variance: self.base_variance + s * s })
     }
     fn name(&self) -> &'static str {
         "filter-prediction"
@@ -320,21 +301,14 @@ pub struct FdsrConfig {
 
 impl Default for FdsrConfig {
     fn default() -> Self {
-        FdsrConfig {
-            strategy: Strategy::Switch,
-            alpha: 0.001,
-            eta: 0.1,
-        }
+        FdsrConfig { strategy: Strategy::Switch, alpha: 0.001, eta: 0.1 }
     }
 }
 
 impl FdsrConfig {
     pub fn check(&self) -> Result<f64, TightError> {
         if !(self.eta.is_finite() && self.eta >= 0.0) {
-            return Err(TightError::new(
-                "eta",
-                format!("must be finite and >= 0, got {}", self.eta),
-            ));
+            return Err(TightError::new("eta", format!("must be finite and >= 0, got {}", self.eta)));
         }
         threshold_t1(self.alpha)
     }
@@ -368,32 +342,17 @@ impl Reconfigurator {
             Strategy::Gan => Some(Box::new(GanMonitor::new(default_model()?))),
             _ => None,
         };
-        Ok(Reconfigurator {
-            cfg,
-            t1,
-            predictor,
-            under_repair: BTreeMap::new(),
-            gan,
-        })
+        Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new(), gan })
     }
 
     /// [`Strategy::Gan`] with a given model (e.g. one trained on the user's
     /// data) in place of the embedded default.
     pub fn with_gan(cfg: FdsrConfig, model: GanDetectorModel) -> Result<Self, TightError> {
         let t1 = cfg.check()?;
-        let cfg = FdsrConfig {
-            strategy: Strategy::Gan,
-            ..cfg
-        };
+        let cfg = FdsrConfig { strategy: Strategy::Gan, ..cfg };
         // The GAN path rebuilds from its generator; this predictor is unused.
         let predictor = Box::new(FilterPredictor::new(1.0));
-        Ok(Reconfigurator {
-            cfg,
-            t1,
-            predictor,
-            under_repair: BTreeMap::new(),
-            gan: Some(Box::new(GanMonitor::new(model))),
-        })
+        Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new(), gan: Some(Box::new(GanMonitor::new(model))) })
     }
 
     /// One GNSS epoch at time `t` (s): test, reconfigure, update the filter.
@@ -416,25 +375,10 @@ impl Reconfigurator {
             out.action = Action::Rejected;
             return out;
         };
-        out.lambdas = lin
-            .prns
-            .iter()
-            .zip(lam.iter())
-            .map(|(&p, &l)| (p, l))
-            .collect();
+        out.lambdas = lin.prns.iter().zip(lam.iter()).map(|(&p, &l)| (p, l)).collect();
         out.lambda_max = lam.iter().fold(0.0f64, |m, l| m.max(l.abs()));
         if let Some(gan) = self.gan.as_deref_mut() {
-            epoch_gan(
-                gan,
-                &mut self.under_repair,
-                self.t1,
-                cfg.eta,
-                ekf,
-                &lin,
-                &pv,
-                t,
-                &mut out,
-            );
+            epoch_gan(gan, &mut self.under_repair, self.t1, cfg.eta, ekf, &lin, &pv, t, &mut out);
             return out;
         }
 
@@ -443,9 +387,7 @@ impl Reconfigurator {
         let mut det = None;
         if cfg.strategy == Strategy::Switch {
             let predictor = &mut self.predictor;
-            let (d, release) = repair_check(&self.under_repair, &lin, self.t1, |prn, pred| {
-                predictor.reconstruct(t, prn, pred)
-            });
+            let (d, release) = repair_check(&self.under_repair, &lin, self.t1, |prn, pred| predictor.reconstruct(t, prn, pred));
             det = d;
             for p in release {
                 self.under_repair.remove(&p);
@@ -462,12 +404,7 @@ impl Reconfigurator {
         // Healthy satellites feed the predictor's history.
         for i in 0..lin.len() {
             if Some(i) != flagged && !self.under_repair.contains_key(&lin.prns[i]) {
-                self.predictor.observe(
-                    t,
-                    lin.prns[i],
-                    lin.predicted[i] + lin.v[i],
-                    lin.predicted[i],
-                );
+                self.predictor.observe(t, lin.prns[i], lin.predicted[i] + lin.v[i], lin.predicted[i]);
             }
         }
         let (used, action) = match det {
@@ -522,11 +459,7 @@ fn repair_check(
             Some(r) => {
                 let stat = (pr - r.pr) / libm::sqrt(lin.r[(i, i)] + r.variance);
                 if stat.abs() > t1 && det.is_none() {
-                    det = Some(Detection {
-                        index: i,
-                        prn,
-                        lambda: stat,
-                    });
+                    det = Some(Detection { index: i, prn, lambda: stat });
                 } else if stat.abs() <= t1 {
                     release.push(prn);
                 }
@@ -539,12 +472,7 @@ fn repair_check(
 
 /// The measurement set with satellite `i` replaced by `rec`, or without it
 /// when there is no reconstruction.
-fn reconstruct_or_isolate(
-    lin: &Linearized,
-    pv: &DMatrix<f64>,
-    i: usize,
-    rec: Option<Reconstruction>,
-) -> (Linearized, Action) {
+fn reconstruct_or_isolate(lin: &Linearized, pv: &DMatrix<f64>, i: usize, rec: Option<Reconstruction>) -> (Linearized, Action) {
     match rec {
         Some(r) => {
             let mut l = lin.clone();
@@ -578,9 +506,7 @@ fn epoch_gan(
 ) {
     let v: Vec<f64> = lin.v.iter().copied().collect();
     let lam: Vec<f64> = out.lambdas.iter().map(|x| x.1).collect();
-    let sd: Vec<f64> = (0..lin.len())
-        .map(|i| libm::sqrt(pv[(i, i)].max(0.0)))
-        .collect();
+    let sd: Vec<f64> = (0..lin.len()).map(|i| libm::sqrt(pv[(i, i)].max(0.0))).collect();
     let scores = match gan.epoch(t, &lin.prns, &v, &lam, &sd) {
         Ok(s) => s,
         Err(_) => {
@@ -589,9 +515,7 @@ fn epoch_gan(
         }
     };
     out.gan_scores = scores.iter().map(|s| (s.prn, s.score)).collect();
-    let (mut det, release) = repair_check(under_repair, lin, t1, |prn, pred| {
-        gan.reconstruct(prn, pred)
-    });
+    let (mut det, release) = repair_check(under_repair, lin, t1, |prn, pred| gan.reconstruct(prn, pred));
     for p in release {
         under_repair.remove(&p);
         gan.end_repair(p);
@@ -603,11 +527,7 @@ fn epoch_gan(
             .enumerate()
             .filter(|(_, s)| s.score > t2 && !under_repair.contains_key(&s.prn))
             .max_by(|a, b| a.1.score.total_cmp(&b.1.score));
-        det = best.map(|(i, s)| Detection {
-            index: i,
-            prn: s.prn,
-            lambda: s.score,
-        });
+        det = best.map(|(i, s)| Detection { index: i, prn: s.prn, lambda: s.score });
         if det.is_none() && gan.model.lambda_test {
             let lam = DVector::from_iterator(out.lambdas.len(), out.lambdas.iter().map(|x| x.1));
             det = detect(&lam, &lin.prns, t1);
@@ -628,11 +548,7 @@ fn epoch_gan(
         None => (lin.clone(), Action::UpdateAll),
         Some(d) => {
             out.rdpop = rdpop(&ekf.p, lin, d.index);
-            let rec = if out.rdpop.is_some_and(|r| r > eta) {
-                gan.reconstruct(d.prn, lin.predicted[d.index])
-            } else {
-                None
-            };
+            let rec = if out.rdpop.is_some_and(|r| r > eta) { gan.reconstruct(d.prn, lin.predicted[d.index]) } else { None };
             reconstruct_or_isolate(lin, pv, d.index, rec)
         }
     };
@@ -669,27 +585,12 @@ mod tests {
         assert_relative_eq!(threshold_t1(0.001).unwrap(), 3.290_526_731, epsilon = 1e-8);
         assert_relative_eq!(threshold_t1(0.05).unwrap(), 1.959_963_985, epsilon = 1e-8);
         // The paper's 2.88 corresponds to a one-sided 0.002.
-        assert_relative_eq!(
-            normal_upper_quantile(0.002).unwrap(),
-            2.878_161_739,
-            epsilon = 1e-8
-        );
+        assert_relative_eq!(normal_upper_quantile(0.002).unwrap(), 2.878_161_739, epsilon = 1e-8);
         assert!(threshold_t1(0.0).is_err());
-        assert!(threshold_t1(f64::NAN)
-            .unwrap_err()
-            .to_string()
-            .contains("alpha"));
+        assert!(threshold_t1(f64::NAN).unwrap_err().to_string().contains("alpha"));
         // Wilson–Hilferty against tabulated chi-square quantiles.
-        assert_relative_eq!(
-            chi2_quantile(0.975, 10.0).unwrap(),
-            20.483,
-            max_relative = 0.005
-        );
-        assert_relative_eq!(
-            chi2_quantile(0.025, 100.0).unwrap(),
-            74.222,
-            max_relative = 0.005
-        );
+        assert_relative_eq!(chi2_quantile(0.975, 10.0).unwrap(), 20.483, max_relative = 0.005);
+        assert_relative_eq!(chi2_quantile(0.025, 100.0).unwrap(), 74.222, max_relative = 0.005);
     }
 
     #[test]
@@ -801,24 +702,13 @@ mod tests {
             drift: 0.0,
         };
         let ekf = TcEkf::new(x, EkfConfig::default()).unwrap();
-        let dirs = [
-            (0.0, 0.0, -1.0),
-            (0.8, 0.0, -0.6),
-            (-0.4, 0.7, -0.6),
-            (-0.4, -0.7, -0.6),
-            (0.0, 0.9, -0.44),
-            (0.6, -0.6, -0.53),
-        ];
+        let dirs = [(0.0, 0.0, -1.0), (0.8, 0.0, -0.6), (-0.4, 0.7, -0.6), (-0.4, -0.7, -0.6), (0.0, 0.9, -0.44), (0.6, -0.6, -0.53)];
         let meas = dirs
             .iter()
             .enumerate()
             .map(|(i, d)| {
                 let sat = Vector3::new(d.0, d.1, d.2).normalize() * 2.2e7;
-                PrMeas {
-                    prn: i as u8 + 1,
-                    pr: sat.norm(),
-                    sat,
-                }
+                PrMeas { prn: i as u8 + 1, pr: sat.norm(), sat }
             })
             .collect();
         (ekf, meas)
@@ -831,15 +721,7 @@ mod tests {
         faulty[2].pr += 60.0; // PRN 3
         let run = |strategy: Strategy, eta: f64| {
             let mut ekf = ekf0.clone();
-            let mut r = Reconfigurator::new(
-                FdsrConfig {
-                    strategy,
-                    alpha: 0.001,
-                    eta,
-                },
-                Box::new(FilterPredictor::new(9.0)),
-            )
-            .unwrap();
+            let mut r = Reconfigurator::new(FdsrConfig { strategy, alpha: 0.001, eta }, Box::new(FilterPredictor::new(9.0))).unwrap();
             let d0 = r.epoch(&mut ekf, &clean, 0.0);
             assert_eq!(d0.detection, None);
             assert_eq!(d0.action, Action::UpdateAll);
@@ -860,17 +742,11 @@ mod tests {
         // FDA adapts it; the adapted innovation is consistent, so the estimate
         // also stays put.
         let (d, _, e) = run(Strategy::Fda, 0.1);
-        assert_eq!(
-            (d.detection.map(|x| x.prn), d.action),
-            (Some(3), Action::Adapt)
-        );
+        assert_eq!((d.detection.map(|x| x.prn), d.action), (Some(3), Action::Adapt));
         assert!(e.x.p.norm() < 0.5, "{}", e.x.p);
         // Switch: η below the RDPOP reconstructs, η above isolates.
         let (d, r, e) = run(Strategy::Switch, 0.0);
-        assert_eq!(
-            (d.detection.map(|x| x.prn), d.action),
-            (Some(3), Action::Reconstruct)
-        );
+        assert_eq!((d.detection.map(|x| x.prn), d.action), (Some(3), Action::Reconstruct));
         assert!(r.under_repair.contains_key(&3));
         assert!(e.x.p.norm() < 0.5, "{}", e.x.p);
         let (d, mut r, mut e) = run(Strategy::Switch, 1.0e9);
@@ -896,11 +772,7 @@ mod tests {
         assert_relative_eq!(r.variance, 9.0 + 25.0, epsilon = 1e-12);
         // Exponential smoothing with weight 0.2: 0.8·3 + 0.2·(−2) = 2.
         fp.observe(1.0, 5, 98.0, 100.0);
-        assert_relative_eq!(
-            fp.reconstruct(1.0, 5, 0.0).unwrap().pr,
-            2.0,
-            epsilon = 1e-12
-        );
+        assert_relative_eq!(fp.reconstruct(1.0, 5, 0.0).unwrap().pr, 2.0, epsilon = 1e-12);
         // Too old.
         assert!(fp.reconstruct(200.0, 5, 0.0).is_none());
     }

@@ -15,10 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use super::chaos::{analyze, embed, ChaosIndices, ChaosOptions};
 use super::fdi::{FdsrConfig, Reconstruction, Strategy};
-use super::gan::{
-    subsequences, train as train_gan, GanConfig, GanModel, GanScratch, Score, Threshold,
-    TrainProgress,
-};
+use super::gan::{subsequences, train as train_gan, GanConfig, GanModel, GanScratch, Score, Threshold, TrainProgress};
 use super::scenario::{run, RunSpec, SimConfig, World};
 use super::TightError;
 
@@ -99,18 +96,16 @@ impl GanDetectorModel {
 
     pub fn to_bytes(&self) -> Result<Vec<u8>, TightError> {
         let mut out = MAGIC.to_vec();
-        let body = postcard::to_allocvec(self)
-            .map_err(|e| TightError::new("gan model", format!("cannot encode: {e}")))?;
+        let body = postcard::to_allocvec(self).map_err(|e| TightError::new("gan model", format!("cannot encode: {e}")))?;
         out.extend_from_slice(&body);
         Ok(out)
     }
 
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, TightError> {
-        let body = bytes.strip_prefix(MAGIC.as_slice()).ok_or_else(|| {
-            TightError::new("gan model", "not a navguard GAN-FDSR model (bad magic)")
-        })?;
-        let m: GanDetectorModel = postcard::from_bytes(body)
-            .map_err(|e| TightError::new("gan model", format!("damaged: {e}")))?;
+        let body = bytes
+            .strip_prefix(MAGIC.as_slice())
+            .ok_or_else(|| TightError::new("gan model", "not a navguard GAN-FDSR model (bad magic)"))?;
+        let m: GanDetectorModel = postcard::from_bytes(body).map_err(|e| TightError::new("gan model", format!("damaged: {e}")))?;
         m.check()?;
         Ok(m)
     }
@@ -120,29 +115,10 @@ impl GanDetectorModel {
         // index out of range during inference.
         self.gan.validate()?;
         if self.tau == 0 || self.tau > 1000 || self.m == 0 || self.m != self.gan.config().dim {
-            return Err(TightError::new(
-                "gan model",
-                format!(
-                    "tau {} (1..=1000) / m {} do not match the GAN (dim {})",
-                    self.tau,
-                    self.m,
-                    self.gan.config().dim
-                ),
-            ));
+            return Err(TightError::new("gan model", format!("tau {} (1..=1000) / m {} do not match the GAN (dim {})", self.tau, self.m, self.gan.config().dim)));
         }
-        if !(self.scale.is_finite()
-            && self.scale > 0.0
-            && self.mean.is_finite()
-            && self.gen_rms.is_finite()
-            && self.gen_rms >= 0.0)
-        {
-            return Err(TightError::new(
-                "gan model",
-                format!(
-                    "bad normalisation: mean {}, scale {}, gen_rms {}",
-                    self.mean, self.scale, self.gen_rms
-                ),
-            ));
+        if !(self.scale.is_finite() && self.scale > 0.0 && self.mean.is_finite() && self.gen_rms.is_finite() && self.gen_rms >= 0.0) {
+            return Err(TightError::new("gan model", format!("bad normalisation: mean {}, scale {}, gen_rms {}", self.mean, self.scale, self.gen_rms)));
         }
         Ok(())
     }
@@ -153,10 +129,7 @@ impl GanDetectorModel {
 pub fn default_model() -> Result<GanDetectorModel, TightError> {
     let bytes = include_bytes!("gan_default.bin");
     if bytes.is_empty() {
-        return Err(TightError::new(
-            "strategy",
-            "no GAN-FDSR model is embedded in this build (run `navguard-gan train`)",
-        ));
+        return Err(TightError::new("strategy", "no GAN-FDSR model is embedded in this build (run `navguard-gan train`)"));
     }
     GanDetectorModel::from_bytes(bytes)
 }
@@ -205,13 +178,7 @@ const BASE_EPOCHS: usize = 5;
 
 impl GanMonitor {
     pub fn new(model: GanDetectorModel) -> Self {
-        GanMonitor {
-            model,
-            max_gap: 2.5,
-            sats: BTreeMap::new(),
-            y: Vec::new(),
-            scratch: GanScratch::default(),
-        }
+        GanMonitor { model, max_gap: 2.5, sats: BTreeMap::new(), y: Vec::new(), scratch: GanScratch::default() }
     }
 
     /// Detection threshold T2.
@@ -226,20 +193,11 @@ impl GanMonitor {
     /// `lam`: the normalised innovations λ of the same satellites, and `sd`
     /// the standard deviation of each predicted pseudo-range's innovation
     /// (√P_v,ii, m), used by the λ input.
-    pub fn epoch(
-        &mut self,
-        t: f64,
-        prns: &[u8],
-        v: &[f64],
-        lam: &[f64],
-        sd: &[f64],
-    ) -> Result<Vec<SatScore>, TightError> {
+    pub fn epoch(&mut self, t: f64, prns: &[u8], v: &[f64], lam: &[f64], sd: &[f64]) -> Result<Vec<SatScore>, TightError> {
         let model = &self.model;
         let span = model.span();
         let mut out = Vec::with_capacity(prns.len());
-        self.sats.retain(|p, s| {
-            prns.contains(p) || s.last.is_some_and(|(lt, _)| t - lt <= self.max_gap)
-        });
+        self.sats.retain(|p, s| prns.contains(p) || s.last.is_some_and(|(lt, _)| t - lt <= self.max_gap));
         for (k, (&prn, &vi)) in prns.iter().zip(v).enumerate() {
             let s = self.sats.entry(prn).or_default();
             let rd = match s.last {
@@ -255,11 +213,7 @@ impl GanMonitor {
             };
             s.last = Some((t, vi));
             let Some(rd) = rd.filter(|x| x.is_finite()) else {
-                out.push(SatScore {
-                    prn,
-                    score: f64::NAN,
-                    generated: f64::NAN,
-                });
+                out.push(SatScore { prn, score: f64::NAN, generated: f64::NAN });
                 continue;
             };
             s.hist.push_back((rd - model.mean) / model.scale);
@@ -267,16 +221,10 @@ impl GanMonitor {
                 s.hist.pop_front();
             }
             if !model.window_into(&s.hist, &mut self.y) {
-                out.push(SatScore {
-                    prn,
-                    score: f64::NAN,
-                    generated: f64::NAN,
-                });
+                out.push(SatScore { prn, score: f64::NAN, generated: f64::NAN });
                 continue;
             }
-            let sc: Score = model
-                .gan
-                .score_with(&self.y, s.z.as_deref(), &mut self.scratch)?;
+            let sc: Score = model.gan.score_with(&self.y, s.z.as_deref(), &mut self.scratch)?;
             let gen_std = sc.generated.last().copied().unwrap_or(0.0).clamp(-4.0, 4.0);
             let generated = model.mean + model.scale * gen_std;
             // Next epoch's window is this one shifted by one phase point:
@@ -300,11 +248,7 @@ impl GanMonitor {
                     *last = gen_std;
                 }
             }
-            out.push(SatScore {
-                prn,
-                score: sc.score,
-                generated,
-            });
+            out.push(SatScore { prn, score: sc.score, generated });
         }
         Ok(out)
     }
@@ -324,9 +268,7 @@ impl GanMonitor {
     /// Start rebuilding `prn` from its healthy history (R: the measurement
     /// variance, m²). False when there is no healthy history.
     pub fn start_repair(&mut self, prn: u8, r: f64) -> bool {
-        let Some(s) = self.sats.get_mut(&prn) else {
-            return false;
-        };
+        let Some(s) = self.sats.get_mut(&prn) else { return false };
         if s.repair.is_some() {
             return true;
         }
@@ -349,10 +291,7 @@ impl GanMonitor {
     /// filter's predicted one (m).
     pub fn reconstruct(&self, prn: u8, predicted: f64) -> Option<Reconstruction> {
         let (off, var, gen) = self.sats.get(&prn)?.repair?;
-        Some(Reconstruction {
-            pr: predicted + off + gen,
-            variance: var,
-        })
+        Some(Reconstruction { pr: predicted + off + gen, variance: var })
     }
 }
 
@@ -384,11 +323,7 @@ impl Default for GanTrainOptions {
             // 20 epochs: the losses settle by then (D(real) ≈ D(fake) ≈ 0.5);
             // 10 warm-started latent steps per epoch and satellite keep
             // inference at a few ms per GNSS epoch.
-            gan: GanConfig {
-                epochs: 20,
-                z_iters: 10,
-                ..GanConfig::default()
-            },
+            gan: GanConfig { epochs: 20, z_iters: 10, ..GanConfig::default() },
             input: GanInput::Innovation,
             lambda_test: true,
             alpha: 0.001,
@@ -413,25 +348,14 @@ pub struct GanTrainReport {
 
 /// The input series (ρD in m, or λ) of every tracked satellite of a
 /// fault-free flight with no detection, after `skip_s` seconds of settling.
-pub fn input_series(
-    world: &World,
-    sim: &SimConfig,
-    prns: &[u8],
-    seed: u64,
-    skip_s: f64,
-    input: GanInput,
-) -> Result<Vec<(u8, Vec<f64>)>, TightError> {
+pub fn input_series(world: &World, sim: &SimConfig, prns: &[u8], seed: u64, skip_s: f64, input: GanInput) -> Result<Vec<(u8, Vec<f64>)>, TightError> {
     let spec = RunSpec {
         world,
         cfg: sim,
         prns,
         watch_prn: prns.first().copied().unwrap_or(0),
         fault: None,
-        fdsr: FdsrConfig {
-            strategy: Strategy::None,
-            alpha: 0.001,
-            eta: 0.1,
-        },
+        fdsr: FdsrConfig { strategy: Strategy::None, alpha: 0.001, eta: 0.1 },
         seed,
         gan: None,
     };
@@ -451,9 +375,7 @@ pub fn input_series(
                 if t >= skip_s {
                     let x = match input {
                         GanInput::IncrementDifference => v - lv,
-                        GanInput::Innovation => {
-                            lams.and_then(|l| l.get(j)).copied().unwrap_or(f64::NAN)
-                        }
+                        GanInput::Innovation => lams.and_then(|l| l.get(j)).copied().unwrap_or(f64::NAN),
                     };
                     if x.is_finite() {
                         e.0.push(x);
@@ -487,10 +409,7 @@ pub fn train_detector(
     progress: &mut dyn FnMut(&TrainProgress) -> bool,
 ) -> Result<(GanDetectorModel, GanTrainReport), TightError> {
     if opts.train_seeds.is_empty() || opts.calib_seeds.is_empty() {
-        return Err(TightError::new(
-            "seeds",
-            "need at least one training and one calibration seed",
-        ));
+        return Err(TightError::new("seeds", "need at least one training and one calibration seed"));
     }
     let mut train = Vec::new();
     for &s in &opts.train_seeds {
@@ -503,25 +422,9 @@ pub fn train_detector(
     // Chaos indices on the first flight's satellites (Table 1).
     let dt = 1.0 / sim.gnss_rate;
     let mut chaos = Vec::new();
-    let n_first = input_series(
-        world,
-        sim,
-        prns,
-        opts.train_seeds[0],
-        opts.skip_s,
-        opts.input,
-    )?
-    .len();
+    let n_first = input_series(world, sim, prns, opts.train_seeds[0], opts.skip_s, opts.input)?.len();
     for (prn, r) in train.iter().take(n_first) {
-        let c = analyze(
-            r,
-            dt,
-            &ChaosOptions {
-                max_tau: opts.max_tau,
-                max_m: opts.max_m,
-                ..ChaosOptions::default()
-            },
-        )?;
+        let c = analyze(r, dt, &ChaosOptions { max_tau: opts.max_tau, max_m: opts.max_m, ..ChaosOptions::default() })?;
         chaos.push((format!("G{prn}"), c));
     }
     let mut taus: Vec<f64> = chaos.iter().map(|c| c.1.tau as f64).collect();
@@ -532,8 +435,7 @@ pub fn train_detector(
     let all: Vec<f64> = train.iter().flat_map(|s| s.1.iter().copied()).collect();
     let n = all.len() as f64;
     let mean = all.iter().sum::<f64>() / n;
-    let scale =
-        libm::sqrt(all.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0).max(1.0));
+    let scale = libm::sqrt(all.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1.0).max(1.0));
     let mut cfg = opts.gan.clone();
     cfg.dim = m;
     cfg.check()?;
@@ -552,14 +454,7 @@ pub fn train_detector(
     let train_w = windows(&train, cfg.step)?;
     let calib_w = windows(&calib, 1)?;
     let mut gan = train_gan(&train_w, &cfg, progress)?;
-    let threshold = gan.calibrate(
-        &calib_w,
-        if opts.lambda_test {
-            opts.alpha / 2.0
-        } else {
-            opts.alpha
-        },
-    )?;
+    let threshold = gan.calibrate(&calib_w, if opts.lambda_test { opts.alpha / 2.0 } else { opts.alpha })?;
     // Generation error of the newest element (what eq. 12 accumulates).
     let mut se = 0.0;
     let mut k = 0usize;
@@ -581,26 +476,9 @@ pub fn train_detector(
         opts.calib_seeds,
         cfg
     );
-    let model = GanDetectorModel {
-        input: opts.input,
-        lambda_test: opts.lambda_test,
-        tau,
-        m,
-        mean,
-        scale,
-        gen_rms,
-        gan,
-        provenance,
-    };
+    let model = GanDetectorModel { input: opts.input, lambda_test: opts.lambda_test, tau, m, mean, scale, gen_rms, gan, provenance };
     model.check()?;
-    let report = GanTrainReport {
-        chaos,
-        tau,
-        m,
-        train_windows: train_w.len(),
-        calib_windows: calib_w.len(),
-        threshold,
-    };
+    let report = GanTrainReport { chaos, tau, m, train_windows: train_w.len(), calib_windows: calib_w.len(), threshold };
     Ok((model, report))
 }
 
@@ -612,43 +490,27 @@ mod tests {
     fn embedded_models_load_and_round_trip() {
         let m = default_model().unwrap();
         assert_eq!(m.input, GanInput::Innovation);
-        assert!(
-            m.provenance.starts_with("navguard-gan train"),
-            "{}",
-            m.provenance
-        );
+        assert!(m.provenance.starts_with("navguard-gan train"), "{}", m.provenance);
         assert!(m.gan.t2().is_finite() && m.gan.t2() > 0.0);
         assert!(m.gan.lambda() > 0.0 && m.gan.lambda() < 1.0);
         let bytes = m.to_bytes().unwrap();
         let back = GanDetectorModel::from_bytes(&bytes).unwrap();
         assert_eq!(back.gan, m.gan);
-        assert_eq!(
-            (back.tau, back.m, back.mean.to_bits(), back.scale.to_bits()),
-            (m.tau, m.m, m.mean.to_bits(), m.scale.to_bits())
-        );
+        assert_eq!((back.tau, back.m, back.mean.to_bits(), back.scale.to_bits()), (m.tau, m.m, m.mean.to_bits(), m.scale.to_bits()));
         // Damaged bytes are errors, never panics.
         let e = GanDetectorModel::from_bytes(&bytes[..bytes.len() / 2]).unwrap_err();
         assert_eq!(e.field, "gan model");
         let mut bad = bytes.clone();
         bad[0] ^= 1;
-        assert!(GanDetectorModel::from_bytes(&bad)
-            .unwrap_err()
-            .message
-            .contains("magic"));
+        assert!(GanDetectorModel::from_bytes(&bad).unwrap_err().message.contains("magic"));
         assert!(GanDetectorModel::from_bytes(&[]).is_err());
         // The paper-faithful ρD model of `navguard-gan table5` loads too.
         let rhod = GanDetectorModel::from_bytes(include_bytes!("gan_rhod.bin")).unwrap();
-        assert_eq!(
-            (rhod.input, rhod.lambda_test),
-            (GanInput::IncrementDifference, false)
-        );
+        assert_eq!((rhod.input, rhod.lambda_test), (GanInput::IncrementDifference, false));
         // Well-formed bytes of a forged model: refused by the checks.
         let mut forged = m.clone();
         forged.tau = usize::MAX / 2;
-        assert!(GanDetectorModel::from_bytes(&forged.to_bytes().unwrap())
-            .unwrap_err()
-            .message
-            .contains("tau"));
+        assert!(GanDetectorModel::from_bytes(&forged.to_bytes().unwrap()).unwrap_err().message.contains("tau"));
         let mut forged = m.clone();
         forged.m += 1;
         assert!(GanDetectorModel::from_bytes(&forged.to_bytes().unwrap()).is_err());
@@ -687,36 +549,16 @@ mod tests {
         let mut rng = crate::sim::Rng::new(5);
         let mut last = Vec::new();
         for k in 0..(span + 5) {
-            let lam: Vec<f64> = (0..4)
-                .map(|i| rng.normal() + if i == 2 && k > span / 2 { 4.0 } else { 0.0 })
-                .collect();
-            last = mon
-                .epoch(k as f64, &[3, 5, 7, 9], &[0.0; 4], &lam, &[3.0; 4])
-                .unwrap();
+            let lam: Vec<f64> = (0..4).map(|i| rng.normal() + if i == 2 && k > span / 2 { 4.0 } else { 0.0 }).collect();
+            last = mon.epoch(k as f64, &[3, 5, 7, 9], &[0.0; 4], &lam, &[3.0; 4]).unwrap();
         }
         let t2 = mon.t2();
-        assert!(
-            last[2].score > t2,
-            "shifted satellite score {} vs T2 {t2}",
-            last[2].score
-        );
+        assert!(last[2].score > t2, "shifted satellite score {} vs T2 {t2}", last[2].score);
         for i in [0, 1, 3] {
-            assert!(
-                last[i].score.is_finite() && last[i].score < last[2].score,
-                "{:?}",
-                last
-            );
+            assert!(last[i].score.is_finite() && last[i].score < last[2].score, "{:?}", last);
         }
         // After a 5 s gap the history restarts: no score until the window refills.
-        let after = mon
-            .epoch(
-                (span + 10) as f64,
-                &[3, 5, 7, 9],
-                &[0.0; 4],
-                &[0.0; 4],
-                &[3.0; 4],
-            )
-            .unwrap();
+        let after = mon.epoch((span + 10) as f64, &[3, 5, 7, 9], &[0.0; 4], &[0.0; 4], &[3.0; 4]).unwrap();
         assert!(after.iter().all(|s| s.score.is_nan()));
     }
 
@@ -731,10 +573,7 @@ mod tests {
         assert!(mon.start_repair(4, 9.0));
         let r = mon.reconstruct(4, 1000.0).unwrap();
         // Mean healthy innovation 2 m on top of the predicted range; variance R/n.
-        assert!(
-            (r.pr - 1002.0).abs() < 1e-12 && (r.variance - 3.0).abs() < 1e-12,
-            "{r:?}"
-        );
+        assert!((r.pr - 1002.0).abs() < 1e-12 && (r.variance - 3.0).abs() < 1e-12, "{r:?}");
         mon.end_repair(4);
         assert!(mon.reconstruct(4, 1000.0).is_none());
     }

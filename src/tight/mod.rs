@@ -50,10 +50,7 @@ pub struct TightError {
 
 impl TightError {
     pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
-        TightError {
-            field: field.into(),
-            message: message.into(),
-        }
+        TightError { field: field.into(), message: message.into() }
     }
 }
 

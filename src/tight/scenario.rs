@@ -12,10 +12,10 @@ use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::constellation::{dop, los_vectors, Constellation, Site};
-use super::fdi::{rdpop, Action, FdsrConfig, FilterPredictor, Reconfigurator, Strategy};
 use super::gan_fdsr::GanDetectorModel;
-use super::stream::{EpochRow, InitialState, PrObs};
+use super::fdi::{rdpop, Action, FdsrConfig, FilterPredictor, Reconfigurator, Strategy};
 use super::tc_ekf::{quat_exp, EkfConfig, ImuNoise, NavState, PrMeas, TcEkf, Vec17, GRAVITY, N};
+use super::stream::{EpochRow, InitialState, PrObs};
 use super::TightError;
 use crate::sim::Rng;
 
@@ -36,13 +36,7 @@ pub enum FaultType {
 }
 
 impl FaultType {
-    pub const ALL: [FaultType; 5] = [
-        FaultType::Step20,
-        FaultType::Step10,
-        FaultType::Ramp1,
-        FaultType::Ramp05,
-        FaultType::Ramp03,
-    ];
+    pub const ALL: [FaultType; 5] = [FaultType::Step20, FaultType::Step10, FaultType::Ramp1, FaultType::Ramp05, FaultType::Ramp03];
 
     /// Fault on the pseudo-range (m), `dt` seconds after onset.
     pub fn bias(self, dt: f64) -> f64 {
@@ -168,41 +162,24 @@ impl World {
                 best = (n, t0);
             }
         }
-        Ok(World {
-            constellation,
-            site,
-            t0: best.1,
-        })
+        Ok(World { constellation, site, t0: best.1 })
     }
 
     /// PRNs above `mask_deg` at both the start and the end of the run, with
     /// their positions at the start, highest first.
-    fn stable(
-        c: &Constellation,
-        site: &Site,
-        t0: f64,
-        duration: f64,
-        mask_deg: f64,
-    ) -> Vec<(u8, Vector3<f64>)> {
+    fn stable(c: &Constellation, site: &Site, t0: f64, duration: f64, mask_deg: f64) -> Vec<(u8, Vector3<f64>)> {
         let p = Vector3::zeros();
         let m = mask_deg.to_radians();
         let a = c.visible(site, &p, t0, m);
         let b = c.visible(site, &p, t0 + duration, m);
-        a.into_iter()
-            .filter(|s| b.iter().any(|x| x.prn == s.prn))
-            .map(|s| (s.prn, s.pos_ned))
-            .collect()
+        a.into_iter().filter(|s| b.iter().any(|x| x.prn == s.prn)).map(|s| (s.prn, s.pos_ned)).collect()
     }
 
     /// PDOP of a set of PRNs at run time `t` seen from the site.
     pub fn pdop(&self, prns: &[u8], t: f64) -> Option<f64> {
         let sats: Vec<_> = prns
             .iter()
-            .filter_map(|&p| {
-                self.constellation
-                    .orbit(p)
-                    .map(|o| self.site.ecef_to_ned(&o.position_ecef(self.t0 + t)))
-            })
+            .filter_map(|&p| self.constellation.orbit(p).map(|o| self.site.ecef_to_ned(&o.position_ecef(self.t0 + t))))
             .collect();
         dop(&los_vectors(&Vector3::zeros(), &sats)).map(|d| d.pdop)
     }
@@ -262,24 +239,12 @@ fn subsets(items: &[u8], k: usize) -> Vec<Vec<u8>> {
 /// * Env 5: 6 satellites where the faulty satellite matters most (like G7 in
 ///   Sec. 4.2); fault 300–360 s.
 pub fn environments(world: &World, cfg: &SimConfig) -> Result<Vec<Environment>, TightError> {
-    let cands: Vec<u8> = World::stable(
-        &world.constellation,
-        &world.site,
-        world.t0,
-        cfg.duration,
-        15.0,
-    )
-    .into_iter()
-    .map(|(p, _)| p)
-    .collect();
+    let cands: Vec<u8> = World::stable(&world.constellation, &world.site, world.t0, cfg.duration, 15.0)
+        .into_iter()
+        .map(|(p, _)| p)
+        .collect();
     if cands.len() < 7 {
-        return Err(TightError::new(
-            "n_sats",
-            format!(
-                "only {} satellites above 15° for the run; need 7",
-                cands.len()
-            ),
-        ));
+        return Err(TightError::new("n_sats", format!("only {} satellites above 15° for the run; need 7", cands.len())));
     }
     let pd = |s: &[u8], t: f64| world.pdop(s, t).unwrap_or(f64::INFINITY);
     let mut envs = Vec::new();
@@ -343,20 +308,10 @@ pub fn environments(world: &World, cfg: &SimConfig) -> Result<Vec<Environment>, 
             }
         }
     }
-    let (_, g, good, poor) = best.ok_or_else(|| {
-        TightError::new("environment", "no 5-satellite configuration for Env 3/4")
-    })?;
+    let (_, g, good, poor) = best.ok_or_else(|| TightError::new("environment", "no 5-satellite configuration for Env 3/4"))?;
     for (id, set, desc) in [
-        (
-            3u8,
-            good,
-            "5 satellites, configuration 1 (good geometry without the faulty one)",
-        ),
-        (
-            4u8,
-            poor,
-            "5 satellites, configuration 2 (poor geometry without the faulty one)",
-        ),
+        (3u8, good, "5 satellites, configuration 1 (good geometry without the faulty one)"),
+        (4u8, poor, "5 satellites, configuration 2 (poor geometry without the faulty one)"),
     ] {
         envs.push(Environment {
             id,
@@ -391,8 +346,7 @@ pub fn environments(world: &World, cfg: &SimConfig) -> Result<Vec<Environment>, 
             }
         }
     }
-    let (_, g5, s5) = best5
-        .ok_or_else(|| TightError::new("environment", "no 6-satellite configuration for Env 5"))?;
+    let (_, g5, s5) = best5.ok_or_else(|| TightError::new("environment", "no 6-satellite configuration for Env 5"))?;
     envs.push(Environment {
         id: 5,
         name: "Env 5".to_string(),
@@ -414,11 +368,7 @@ pub fn profile(t: f64) -> (f64, f64, f64) {
     let k = libm::floor(t / 100.0);
     let s = t - 100.0 * k;
     let sign = if (k as i64) % 2 == 0 { 1.0 } else { -1.0 };
-    let r = if (40.0..70.0).contains(&s) {
-        sign * 3f64.to_radians()
-    } else {
-        0.0
-    };
+    let r = if (40.0..70.0).contains(&s) { sign * 3f64.to_radians() } else { 0.0 };
     let a_fwd = if (10.0..14.0).contains(&s) {
         0.5
     } else if (80.0..84.0).contains(&s) {
@@ -441,9 +391,7 @@ fn true_imu(x: &NavState, t: f64) -> (Vector3<f64>, Vector3<f64>) {
     let (r, a_fwd, a_down) = profile(t);
     let vh = Vector3::new(x.v[0], x.v[1], 0.0);
     let speed = vh.norm().max(1e-6);
-    let a = vh * (a_fwd / speed)
-        + Vector3::new(-x.v[1], x.v[0], 0.0) * r
-        + Vector3::new(0.0, 0.0, a_down);
+    let a = vh * (a_fwd / speed) + Vector3::new(-x.v[1], x.v[0], 0.0) * r + Vector3::new(0.0, 0.0, a_down);
     let f = x.q.inverse() * (a - Vector3::new(0.0, 0.0, GRAVITY));
     (Vector3::new(0.0, 0.0, r), f)
 }
@@ -477,17 +425,11 @@ pub struct RunRecord {
 
 impl RunRecord {
     fn window(&self, a: f64, b: f64) -> impl Iterator<Item = usize> + '_ {
-        self.t
-            .iter()
-            .enumerate()
-            .filter(move |(_, &t)| t >= a && t < b)
-            .map(|(i, _)| i)
+        self.t.iter().enumerate().filter(move |(_, &t)| t >= a && t < b).map(|(i, _)| i)
     }
     /// RMS position error in `[a, b)`, m.
     pub fn rms(&self, a: f64, b: f64) -> f64 {
-        let (s, n) = self.window(a, b).fold((0.0, 0usize), |(s, n), i| {
-            (s + self.pos_err[i] * self.pos_err[i], n + 1)
-        });
+        let (s, n) = self.window(a, b).fold((0.0, 0usize), |(s, n), i| (s + self.pos_err[i] * self.pos_err[i], n + 1));
         if n == 0 {
             f64::NAN
         } else {
@@ -496,9 +438,7 @@ impl RunRecord {
     }
     /// Maximum position error in `[a, b)`, m.
     pub fn max(&self, a: f64, b: f64) -> f64 {
-        self.window(a, b)
-            .map(|i| self.pos_err[i])
-            .fold(f64::NAN, f64::max)
+        self.window(a, b).map(|i| self.pos_err[i]).fold(f64::NAN, f64::max)
     }
     /// Mean of a series in `[a, b)` ignoring NaN.
     pub fn mean_of(&self, series: &[f64], a: f64, b: f64) -> f64 {
@@ -514,21 +454,15 @@ impl RunRecord {
     }
     /// First epoch in `[a, b)` flagging `prn`, as a delay after `a` (s).
     pub fn detection_delay(&self, prn: u8, a: f64, b: f64) -> Option<f64> {
-        self.window(a, b)
-            .find(|&i| self.flagged_prn[i] == prn)
-            .map(|i| self.t[i] - a)
+        self.window(a, b).find(|&i| self.flagged_prn[i] == prn).map(|i| self.t[i] - a)
     }
     /// Epochs in `[a, b)` flagging a satellite other than `prn`.
     pub fn wrong_flags(&self, prn: u8, a: f64, b: f64) -> usize {
-        self.window(a, b)
-            .filter(|&i| self.flagged_prn[i] != 0 && self.flagged_prn[i] != prn)
-            .count()
+        self.window(a, b).filter(|&i| self.flagged_prn[i] != 0 && self.flagged_prn[i] != prn).count()
     }
     /// Fraction of epochs in `[a, b)` flagging `prn`.
     pub fn flag_rate(&self, prn: u8, a: f64, b: f64) -> f64 {
-        let (k, n) = self.window(a, b).fold((0, 0), |(k, n), i| {
-            (k + usize::from(self.flagged_prn[i] == prn), n + 1)
-        });
+        let (k, n) = self.window(a, b).fold((0, 0), |(k, n), i| (k + usize::from(self.flagged_prn[i] == prn), n + 1));
         if n == 0 {
             f64::NAN
         } else {
@@ -562,9 +496,7 @@ pub fn run(spec: &RunSpec) -> Result<RunRecord, TightError> {
 
 /// [`run`] that also returns the simulated raw rows (one per IMU sample, in
 /// the [`EpochRow`] format of the streaming API) and the true initial state.
-pub fn run_with_rows(
-    spec: &RunSpec,
-) -> Result<(RunRecord, Vec<EpochRow>, InitialState), TightError> {
+pub fn run_with_rows(spec: &RunSpec) -> Result<(RunRecord, Vec<EpochRow>, InitialState), TightError> {
     let mut rows = Vec::new();
     let rec = run_inner(spec, Some(&mut rows))?;
     let init = InitialState {
@@ -578,21 +510,11 @@ pub fn run_with_rows(
     Ok((rec, rows, init))
 }
 
-fn run_inner(
-    spec: &RunSpec,
-    mut rows: Option<&mut Vec<EpochRow>>,
-) -> Result<RunRecord, TightError> {
+fn run_inner(spec: &RunSpec, mut rows: Option<&mut Vec<EpochRow>>) -> Result<RunRecord, TightError> {
     let cfg = spec.cfg;
-    for (f, v) in [
-        ("imu_rate", cfg.imu_rate),
-        ("gnss_rate", cfg.gnss_rate),
-        ("duration", cfg.duration),
-    ] {
+    for (f, v) in [("imu_rate", cfg.imu_rate), ("gnss_rate", cfg.gnss_rate), ("duration", cfg.duration)] {
         if !(v.is_finite() && v > 0.0) {
-            return Err(TightError::new(
-                f,
-                format!("must be finite and > 0, got {v}"),
-            ));
+            return Err(TightError::new(f, format!("must be finite and > 0, got {v}")));
         }
     }
     let dt = 1.0 / cfg.imu_rate;
@@ -628,10 +550,7 @@ fn run_inner(
     let mut ekf = TcEkf::new(x0, cfg.ekf)?;
     let mut fdsr = match (spec.fdsr.strategy, spec.gan) {
         (Strategy::Gan, Some(m)) => Reconfigurator::with_gan(spec.fdsr, m.clone())?,
-        _ => Reconfigurator::new(
-            spec.fdsr,
-            Box::new(FilterPredictor::new(cfg.ekf.sigma_pr * cfg.ekf.sigma_pr)),
-        )?,
+        _ => Reconfigurator::new(spec.fdsr, Box::new(FilterPredictor::new(cfg.ekf.sigma_pr * cfg.ekf.sigma_pr)))?,
     };
 
     // Per-satellite error states.
@@ -660,45 +579,28 @@ fn run_inner(
         let (w, f) = true_imu(&truth, t);
         // IMU readings: truth + bias + white noise; biases random-walk.
         let sq = libm::sqrt(dt);
-        let gyro = w
-            + truth.bg
-            + Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal())
-                * (n.gyro_arw / sq);
-        let acc = f
-            + truth.ba
-            + Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal())
-                * (n.accel_vrw / sq);
+        let gyro = w + truth.bg + Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal()) * (n.gyro_arw / sq);
+        let acc = f + truth.ba + Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal()) * (n.accel_vrw / sq);
         truth.mechanize(&w, &f, dt);
-        truth.bg += Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal())
-            * (n.gyro_bias_rw * sq);
-        truth.ba += Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal())
-            * (n.accel_bias_rw * sq);
+        truth.bg += Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal()) * (n.gyro_bias_rw * sq);
+        truth.ba += Vector3::new(rng_imu.normal(), rng_imu.normal(), rng_imu.normal()) * (n.accel_bias_rw * sq);
         let (z1, z2) = (rng_clk.normal(), rng_clk.normal());
         truth.clk += l11 * z1;
         truth.drift += l21 * z1 + l22 * z2;
         ekf.propagate(&gyro, &acc, dt);
         if let Some(r) = rows.as_deref_mut() {
-            r.push(EpochRow {
-                t: (k + 1) as f64 * dt,
-                gyro: [gyro[0], gyro[1], gyro[2]],
-                accel: [acc[0], acc[1], acc[2]],
-                pr: Vec::new(),
-            });
+            r.push(EpochRow { t: (k + 1) as f64 * dt, gyro: [gyro[0], gyro[1], gyro[2]], accel: [acc[0], acc[1], acc[2]], pr: Vec::new() });
         }
 
         if (k + 1) % steps_per_epoch != 0 {
             continue;
         }
         let te = (k + 1) as f64 * dt;
-        let sats = spec
-            .world
-            .constellation
-            .positions_ned(&spec.world.site, spec.world.t0 + te);
+        let sats = spec.world.constellation.positions_ned(&spec.world.site, spec.world.t0 + te);
         let mut meas = Vec::new();
         for (prn, s) in sats {
             let i = prn as usize;
-            mp[i] = phi_mp * mp[i]
-                + libm::sqrt(1.0 - phi_mp * phi_mp) * cfg.multipath_sigma * rng_gnss.normal();
+            mp[i] = phi_mp * mp[i] + libm::sqrt(1.0 - phi_mp * phi_mp) * cfg.multipath_sigma * rng_gnss.normal();
             let white = cfg.sigma_white * rng_gnss.normal();
             if !spec.prns.contains(&prn) {
                 continue;
@@ -708,53 +610,19 @@ fn run_inner(
                 continue;
             }
             let fault = spec.fault.map_or(0.0, |fs| fs.bias(prn, te));
-            let pr = (s - truth.p).norm()
-                + truth.clk
-                + tropo[i] * 2.4 / libm::sin(el)
-                + mp[i]
-                + white
-                + fault;
+            let pr = (s - truth.p).norm() + truth.clk + tropo[i] * 2.4 / libm::sin(el) + mp[i] + white + fault;
             meas.push(PrMeas { prn, pr, sat: s });
         }
         if let Some(last) = rows.as_deref_mut().and_then(|r| r.last_mut()) {
-            last.pr = meas
-                .iter()
-                .map(|m| PrObs {
-                    prn: m.prn,
-                    pr: m.pr,
-                })
-                .collect();
+            last.pr = meas.iter().map(|m| PrObs { prn: m.prn, pr: m.pr }).collect();
         }
         let lin = ekf.linearize(&meas);
-        rec.ranges.push(
-            lin.prns
-                .iter()
-                .zip(&lin.predicted)
-                .zip(lin.v.iter())
-                .map(|((&p, &pred), &v)| (p, pred + v, pred))
-                .collect(),
-        );
+        rec.ranges.push(lin.prns.iter().zip(&lin.predicted).zip(lin.v.iter()).map(|((&p, &pred), &v)| (p, pred + v, pred)).collect());
         let watch = lin.index_of(spec.watch_prn);
-        let rd = watch
-            .and_then(|i| rdpop(&ekf.p, &lin, i))
-            .unwrap_or(f64::NAN);
+        let rd = watch.and_then(|i| rdpop(&ekf.p, &lin, i)).unwrap_or(f64::NAN);
         let d = fdsr.epoch(&mut ekf, &meas, te);
-        let lam = d
-            .lambdas
-            .iter()
-            .find(|(p, _)| *p == spec.watch_prn)
-            .map_or(f64::NAN, |x| x.1);
-        rec.lambdas.push(
-            lin.prns
-                .iter()
-                .map(|p| {
-                    d.lambdas
-                        .iter()
-                        .find(|x| x.0 == *p)
-                        .map_or(f64::NAN, |x| x.1)
-                })
-                .collect(),
-        );
+        let lam = d.lambdas.iter().find(|(p, _)| *p == spec.watch_prn).map_or(f64::NAN, |x| x.1);
+        rec.lambdas.push(lin.prns.iter().map(|p| d.lambdas.iter().find(|x| x.0 == *p).map_or(f64::NAN, |x| x.1)).collect());
         rec.t.push(te);
         rec.pos_err.push((ekf.x.p - truth.p).norm());
         rec.rdpop_faulty.push(rd);
@@ -784,21 +652,8 @@ impl CaseResult {
 }
 
 /// Runs FF, FDI, FDA and the RDPOP switch for one environment and fault.
-pub fn run_case(
-    world: &World,
-    cfg: &SimConfig,
-    env: &Environment,
-    kind: FaultType,
-    eta: f64,
-    seed: u64,
-    label: &str,
-) -> Result<CaseResult, TightError> {
-    let fault = FaultSpec {
-        prn: env.faulty_prn,
-        kind,
-        start: env.fault_start,
-        end: env.fault_end,
-    };
+pub fn run_case(world: &World, cfg: &SimConfig, env: &Environment, kind: FaultType, eta: f64, seed: u64, label: &str) -> Result<CaseResult, TightError> {
+    let fault = FaultSpec { prn: env.faulty_prn, kind, start: env.fault_start, end: env.fault_end };
     let mut runs = Vec::new();
     for (name, strategy, faulty) in [
         ("FF", Strategy::None, false),
@@ -812,22 +667,13 @@ pub fn run_case(
             prns: &env.prns,
             watch_prn: env.faulty_prn,
             fault: faulty.then_some(fault),
-            fdsr: FdsrConfig {
-                strategy,
-                alpha: 0.001,
-                eta,
-            },
+            fdsr: FdsrConfig { strategy, alpha: 0.001, eta },
             seed,
             gan: None,
         };
         runs.push((name.to_string(), run(&spec)?));
     }
-    Ok(CaseResult {
-        label: label.to_string(),
-        env: env.clone(),
-        fault,
-        runs,
-    })
+    Ok(CaseResult { label: label.to_string(), env: env.clone(), fault, runs })
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]
@@ -842,12 +688,7 @@ mod tests {
         assert!((FaultType::Ramp1.bias(18.0) - 18.0).abs() < 1e-12);
         assert!((FaultType::Ramp05.bias(34.0) - 17.0).abs() < 1e-12);
         assert!((FaultType::Ramp03.bias(60.0) - 18.0).abs() < 1e-12);
-        let f = FaultSpec {
-            prn: 7,
-            kind: FaultType::Ramp1,
-            start: 300.0,
-            end: 360.0,
-        };
+        let f = FaultSpec { prn: 7, kind: FaultType::Ramp1, start: 300.0, end: 360.0 };
         assert_eq!(f.bias(7, 299.0), 0.0);
         assert_eq!(f.bias(7, 310.0), 10.0);
         assert_eq!(f.bias(8, 310.0), 0.0);
@@ -866,19 +707,9 @@ mod tests {
         assert_eq!(envs[2].faulty_prn, envs[3].faulty_prn);
         assert!(envs.iter().all(|e| e.prns.contains(&e.faulty_prn)));
         // Configuration 2 loses far more geometry than configuration 1.
-        assert!(
-            envs[3].pdop_without_faulty > 5.0 * envs[2].pdop_without_faulty,
-            "{envs:?}"
-        );
+        assert!(envs[3].pdop_without_faulty > 5.0 * envs[2].pdop_without_faulty, "{envs:?}");
         assert!(envs[1].pdop_without_faulty > 3.0 * envs[0].pdop_without_faulty);
-        assert_eq!(
-            (
-                envs[0].fault_start,
-                envs[2].fault_start,
-                envs[4].fault_start
-            ),
-            (199.0, 256.0, 300.0)
-        );
+        assert_eq!((envs[0].fault_start, envs[2].fault_start, envs[4].fault_start), (199.0, 256.0, 300.0));
     }
 
     /// EKF consistency: averaged NEES of the 17-dim error state over Monte
@@ -898,11 +729,7 @@ mod tests {
                 prns: &envs[0].prns,
                 watch_prn: envs[0].faulty_prn,
                 fault: None,
-                fdsr: FdsrConfig {
-                    strategy: Strategy::None,
-                    alpha: 0.001,
-                    eta: 0.1,
-                },
+                fdsr: FdsrConfig { strategy: Strategy::None, alpha: 0.001, eta: 0.1 },
                 seed: 100 + seed,
                 gan: None,
             };
@@ -919,14 +746,10 @@ mod tests {
         let lo = chi2_quantile(0.005, dof).unwrap() / m as f64;
         let hi = chi2_quantile(0.995, dof).unwrap() / m as f64;
         let anees: Vec<f64> = sum.iter().map(|s| s / m as f64).collect();
-        let inside =
-            anees.iter().filter(|a| **a >= lo && **a <= hi).count() as f64 / anees.len() as f64;
+        let inside = anees.iter().filter(|a| **a >= lo && **a <= hi).count() as f64 / anees.len() as f64;
         let mean = anees.iter().sum::<f64>() / anees.len() as f64;
         eprintln!("ANEES mean {mean:.2} (dof {N}), band [{lo:.2}, {hi:.2}], inside {inside:.3}");
         assert!(inside >= 0.9, "only {inside} of epochs inside [{lo}, {hi}]");
-        assert!(
-            (0.85 * N as f64..=1.15 * N as f64).contains(&mean),
-            "mean ANEES {mean}"
-        );
+        assert!((0.85 * N as f64..=1.15 * N as f64).contains(&mean), "mean ANEES {mean}");
     }
 }

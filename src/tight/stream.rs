@@ -168,35 +168,15 @@ impl TightDetector {
     }
 
     /// With another reconstruction predictor (e.g. a GAN generator).
-    pub fn with_predictor(
-        cfg: TightConfig,
-        predictor: Box<dyn RangePredictor>,
-    ) -> Result<Self, TightError> {
+    pub fn with_predictor(cfg: TightConfig, predictor: Box<dyn RangePredictor>) -> Result<Self, TightError> {
         cfg.ekf.check()?;
         let constellation = Constellation::gps_like(cfg.n_sats)?;
         let site = Site::new(cfg.site[0], cfg.site[1], cfg.site[2])?;
         if !cfg.t0.is_finite() {
-            return Err(TightError::new(
-                "t0",
-                format!("must be finite, got {}", cfg.t0),
-            ));
+            return Err(TightError::new("t0", format!("must be finite, got {}", cfg.t0)));
         }
-        let fdsr = Reconfigurator::new(
-            FdsrConfig {
-                strategy: cfg.strategy,
-                alpha: cfg.alpha,
-                eta: cfg.eta,
-            },
-            predictor,
-        )?;
-        let mut d = TightDetector {
-            cfg,
-            constellation,
-            site,
-            ekf: None,
-            fdsr,
-            last_t: None,
-        };
+        let fdsr = Reconfigurator::new(FdsrConfig { strategy: cfg.strategy, alpha: cfg.alpha, eta: cfg.eta }, predictor)?;
+        let mut d = TightDetector { cfg, constellation, site, ekf: None, fdsr, last_t: None };
         if let Some(init) = d.cfg.initial {
             d.ekf = Some(d.filter_from(&init)?);
             d.last_t = Some(init.t);
@@ -208,21 +188,8 @@ impl TightDetector {
     /// of the embedded default; `cfg.strategy` is set to `gan`.
     pub fn with_gan(mut cfg: TightConfig, model: GanDetectorModel) -> Result<Self, TightError> {
         cfg.strategy = Strategy::Gan;
-        let mut d = Self::with_predictor(
-            TightConfig {
-                strategy: Strategy::Fdi,
-                ..cfg.clone()
-            },
-            Box::new(FilterPredictor::new(1.0)),
-        )?;
-        d.fdsr = Reconfigurator::with_gan(
-            FdsrConfig {
-                strategy: Strategy::Gan,
-                alpha: cfg.alpha,
-                eta: cfg.eta,
-            },
-            model,
-        )?;
+        let mut d = Self::with_predictor(TightConfig { strategy: Strategy::Fdi, ..cfg.clone() }, Box::new(FilterPredictor::new(1.0)))?;
+        d.fdsr = Reconfigurator::with_gan(FdsrConfig { strategy: Strategy::Gan, alpha: cfg.alpha, eta: cfg.eta }, model)?;
         d.cfg = cfg;
         Ok(d)
     }
@@ -239,18 +206,11 @@ impl TightDetector {
         for i in 0..3 {
             super::finite(&format!("initial.position_ned[{i}]"), s.position_ned[i])?;
             super::finite(&format!("initial.velocity_ned[{i}]"), s.velocity_ned[i])?;
-            super::finite(
-                &format!("initial.roll_pitch_yaw_deg[{i}]"),
-                s.roll_pitch_yaw_deg[i],
-            )?;
+            super::finite(&format!("initial.roll_pitch_yaw_deg[{i}]"), s.roll_pitch_yaw_deg[i])?;
         }
         let [r, p, y] = s.roll_pitch_yaw_deg;
         let x = NavState {
-            q: UnitQuaternion::from_rotation_matrix(&euler_dcm(
-                r.to_radians(),
-                p.to_radians(),
-                y.to_radians(),
-            )),
+            q: UnitQuaternion::from_rotation_matrix(&euler_dcm(r.to_radians(), p.to_radians(), y.to_radians())),
             v: Vector3::from(s.velocity_ned),
             p: Vector3::from(s.position_ned),
             bg: Vector3::zeros(),
@@ -271,10 +231,7 @@ impl TightDetector {
         super::finite("t", row.t)?;
         if let Some(lt) = self.last_t {
             if row.t <= lt {
-                return Err(TightError::new(
-                    "t",
-                    format!("must increase: {} after {}", row.t, lt),
-                ));
+                return Err(TightError::new("t", format!("must increase: {} after {}", row.t, lt)));
             }
         }
         for i in 0..3 {
@@ -284,38 +241,18 @@ impl TightDetector {
         let mut meas = Vec::with_capacity(row.pr.len());
         for (k, o) in row.pr.iter().enumerate() {
             let field = format!("pr_{}", o.prn);
-            let orbit = self.constellation.orbit(o.prn).ok_or_else(|| {
-                TightError::new(
-                    &field,
-                    format!(
-                        "unknown satellite {} (almanac has 1..={})",
-                        o.prn, self.cfg.n_sats
-                    ),
-                )
-            })?;
+            let orbit = self
+                .constellation
+                .orbit(o.prn)
+                .ok_or_else(|| TightError::new(&field, format!("unknown satellite {} (almanac has 1..={})", o.prn, self.cfg.n_sats)))?;
             if !(o.pr.is_finite() && o.pr > 1.0e6 && o.pr < 1.0e8) {
-                return Err(TightError::new(
-                    &field,
-                    format!(
-                        "pseudo-range must be finite and in (1e6, 1e8) m, got {}",
-                        o.pr
-                    ),
-                ));
+                return Err(TightError::new(&field, format!("pseudo-range must be finite and in (1e6, 1e8) m, got {}", o.pr)));
             }
             if row.pr[..k].iter().any(|x| x.prn == o.prn) {
-                return Err(TightError::new(
-                    &field,
-                    format!("satellite {} appears twice in one row", o.prn),
-                ));
+                return Err(TightError::new(&field, format!("satellite {} appears twice in one row", o.prn)));
             }
-            let sat = self
-                .site
-                .ecef_to_ned(&orbit.position_ecef(self.cfg.t0 + row.t));
-            meas.push(PrMeas {
-                prn: o.prn,
-                pr: o.pr,
-                sat,
-            });
+            let sat = self.site.ecef_to_ned(&orbit.position_ecef(self.cfg.t0 + row.t));
+            meas.push(PrMeas { prn: o.prn, pr: o.pr, sat });
         }
         let gyro = Vector3::from(row.gyro);
         let accel = Vector3::from(row.accel);
@@ -363,27 +300,13 @@ impl TightDetector {
             return Ok(output(row.t, Status::NoGnss, ekf, 0));
         }
         let d = self.fdsr.epoch(ekf, &meas, row.t);
-        let mut out = output(
-            row.t,
-            if d.detection.is_some() {
-                Status::Fault
-            } else {
-                Status::Ok
-            },
-            ekf,
-            meas.len(),
-        );
+        let mut out = output(row.t, if d.detection.is_some() { Status::Fault } else { Status::Ok }, ekf, meas.len());
         out.faulty_prn = d.detection.map(|x| x.prn);
         out.statistic = d.detection.map(|x| x.lambda);
         out.lambda_max = d.lambda_max;
         out.rdpop = d.rdpop;
         out.action = Some(d.action);
-        out.gan_score_max = d
-            .gan_scores
-            .iter()
-            .map(|x| x.1)
-            .filter(|x| x.is_finite())
-            .fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.max(x))));
+        out.gan_score_max = d.gan_scores.iter().map(|x| x.1).filter(|x| x.is_finite()).fold(None, |m: Option<f64>, x| Some(m.map_or(x, |m| m.max(x))));
         Ok(out)
     }
 
@@ -391,10 +314,7 @@ impl TightDetector {
     pub fn run(&mut self, rows: &[EpochRow]) -> Result<Vec<EpochOutput>, TightError> {
         let mut out = Vec::with_capacity(rows.len());
         for (i, r) in rows.iter().enumerate() {
-            out.push(
-                self.push(r)
-                    .map_err(|e| TightError::new(format!("row {i}: {}", e.field), e.message))?,
-            );
+            out.push(self.push(r).map_err(|e| TightError::new(format!("row {i}: {}", e.field), e.message))?);
         }
         Ok(out)
     }
@@ -419,14 +339,7 @@ fn output(t: f64, status: Status, ekf: &TcEkf, n_sats: usize) -> EpochOutput {
 
 /// Body-to-NED rotation from roll, pitch, yaw (rad), libm trigonometry.
 fn euler_dcm(r: f64, p: f64, y: f64) -> nalgebra::Rotation3<f64> {
-    let (sr, cr, sp, cp, sy, cy) = (
-        libm::sin(r),
-        libm::cos(r),
-        libm::sin(p),
-        libm::cos(p),
-        libm::sin(y),
-        libm::cos(y),
-    );
+    let (sr, cr, sp, cp, sy, cy) = (libm::sin(r), libm::cos(r), libm::sin(p), libm::cos(p), libm::sin(y), libm::cos(y));
     #[rustfmt::skip]
     let m = nalgebra::Matrix3::new(
         cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy,
@@ -476,13 +389,8 @@ const IMU_COLS: [&str; 7] = ["t", "gx", "gy", "gz", "ax", "ay", "az"];
 /// Blank lines and lines starting with `#` are skipped. Errors name the
 /// line, the column and the bad value.
 pub fn parse_csv(text: &str) -> Result<Vec<EpochRow>, TightError> {
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let (_, header) = lines
-        .next()
-        .ok_or_else(|| TightError::new("header", "empty input: no header line"))?;
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let (_, header) = lines.next().ok_or_else(|| TightError::new("header", "empty input: no header line"))?;
     let cols: Vec<&str> = header.split(',').map(|c| c.trim()).collect();
     if cols.contains(&"sat_id") {
         return parse_long(&cols, lines);
@@ -496,12 +404,7 @@ pub fn parse_csv(text: &str) -> Result<Vec<EpochRow>, TightError> {
             }
             imu_idx[k] = i;
         } else if let Some(n) = c.strip_prefix("pr_") {
-            let prn: u8 = n.parse().map_err(|_| {
-                TightError::new(
-                    *c,
-                    format!("satellite id must be an integer 1..=255, got {n:?}"),
-                )
-            })?;
+            let prn: u8 = n.parse().map_err(|_| TightError::new(*c, format!("satellite id must be an integer 1..=255, got {n:?}")))?;
             if prn == 0 {
                 return Err(TightError::new(*c, "satellite id must be >= 1, got 0"));
             }
@@ -510,39 +413,22 @@ pub fn parse_csv(text: &str) -> Result<Vec<EpochRow>, TightError> {
             }
             pr_cols.push((i, prn));
         } else {
-            return Err(TightError::new(
-                *c,
-                "unknown column (expected t, gx, gy, gz, ax, ay, az, pr_<prn>)",
-            ));
+            return Err(TightError::new(*c, "unknown column (expected t, gx, gy, gz, ax, ay, az, pr_<prn>)"));
         }
     }
     if let Some(k) = imu_idx.iter().position(|&i| i == usize::MAX) {
-        return Err(TightError::new(
-            IMU_COLS[k],
-            "required column missing from the header",
-        ));
+        return Err(TightError::new(IMU_COLS[k], "required column missing from the header"));
     }
     let mut rows = Vec::new();
     for (ln, line) in lines {
         let cells: Vec<&str> = line.split(',').map(|c| c.trim()).collect();
         let lno = ln + 1;
         if cells.len() != cols.len() {
-            return Err(TightError::new(
-                format!("line {lno}"),
-                format!("{} cells, header has {}", cells.len(), cols.len()),
-            ));
+            return Err(TightError::new(format!("line {lno}"), format!("{} cells, header has {}", cells.len(), cols.len())));
         }
         let num = |i: usize| -> Result<f64, TightError> {
             let s = cells[i];
-            s.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    TightError::new(
-                        format!("line {lno}: {}", cols[i]),
-                        format!("must be a finite number, got {s:?}"),
-                    )
-                })
+            s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| TightError::new(format!("line {lno}: {}", cols[i]), format!("must be a finite number, got {s:?}")))
         };
         let mut v = [0.0; 7];
         for k in 0..7 {
@@ -556,45 +442,24 @@ pub fn parse_csv(text: &str) -> Result<Vec<EpochRow>, TightError> {
             }
             pr.push(PrObs { prn, pr: num(i)? });
         }
-        rows.push(EpochRow {
-            t: v[0],
-            gyro: [v[1], v[2], v[3]],
-            accel: [v[4], v[5], v[6]],
-            pr,
-        });
+        rows.push(EpochRow { t: v[0], gyro: [v[1], v[2], v[3]], accel: [v[4], v[5], v[6]], pr });
     }
     Ok(rows)
 }
 
-fn parse_long<'a>(
-    cols: &[&str],
-    lines: impl Iterator<Item = (usize, &'a str)>,
-) -> Result<Vec<EpochRow>, TightError> {
+fn parse_long<'a>(cols: &[&str], lines: impl Iterator<Item = (usize, &'a str)>) -> Result<Vec<EpochRow>, TightError> {
     let want = ["t", "gx", "gy", "gz", "ax", "ay", "az", "sat_id", "pr"];
     for c in cols {
         if !want.contains(c) {
-            return Err(TightError::new(
-                *c,
-                "unknown column (long layout: t, gx, gy, gz, ax, ay, az, sat_id, pr)",
-            ));
+            return Err(TightError::new(*c, "unknown column (long layout: t, gx, gy, gz, ax, ay, az, sat_id, pr)"));
         }
     }
     let mut idx = [usize::MAX; 9];
     for (k, w) in want.iter().enumerate() {
-        let found: Vec<usize> = cols
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| *c == w)
-            .map(|(i, _)| i)
-            .collect();
+        let found: Vec<usize> = cols.iter().enumerate().filter(|(_, c)| *c == w).map(|(i, _)| i).collect();
         match found.as_slice() {
             [i] => idx[k] = *i,
-            [] => {
-                return Err(TightError::new(
-                    *w,
-                    "required column missing from the header",
-                ))
-            }
+            [] => return Err(TightError::new(*w, "required column missing from the header")),
             _ => return Err(TightError::new(*w, "column appears twice in the header")),
         }
     }
@@ -603,22 +468,11 @@ fn parse_long<'a>(
         let lno = ln + 1;
         let cells: Vec<&str> = line.split(',').map(|c| c.trim()).collect();
         if cells.len() != cols.len() {
-            return Err(TightError::new(
-                format!("line {lno}"),
-                format!("{} cells, header has {}", cells.len(), cols.len()),
-            ));
+            return Err(TightError::new(format!("line {lno}"), format!("{} cells, header has {}", cells.len(), cols.len())));
         }
         let num = |k: usize| -> Result<f64, TightError> {
             let s = cells[idx[k]];
-            s.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    TightError::new(
-                        format!("line {lno}: {}", want[k]),
-                        format!("must be a finite number, got {s:?}"),
-                    )
-                })
+            s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| TightError::new(format!("line {lno}: {}", want[k]), format!("must be a finite number, got {s:?}")))
         };
         let mut v = [0.0; 7];
         for (k, x) in v.iter_mut().enumerate() {
@@ -628,12 +482,11 @@ fn parse_long<'a>(
         let obs = if sid.is_empty() && (prs.is_empty() || prs.eq_ignore_ascii_case("nan")) {
             None
         } else {
-            let prn: u8 = sid.parse().ok().filter(|p| *p >= 1).ok_or_else(|| {
-                TightError::new(
-                    format!("line {lno}: sat_id"),
-                    format!("must be an integer 1..=255, got {sid:?}"),
-                )
-            })?;
+            let prn: u8 = sid
+                .parse()
+                .ok()
+                .filter(|p| *p >= 1)
+                .ok_or_else(|| TightError::new(format!("line {lno}: sat_id"), format!("must be an integer 1..=255, got {sid:?}")))?;
             if prs.is_empty() || prs.eq_ignore_ascii_case("nan") {
                 None
             } else {
@@ -643,24 +496,13 @@ fn parse_long<'a>(
         match rows.last_mut() {
             Some(last) if last.t == v[0] => {
                 if last.gyro != [v[1], v[2], v[3]] || last.accel != [v[4], v[5], v[6]] {
-                    return Err(TightError::new(
-                        format!("line {lno}: gx..az"),
-                        format!(
-                            "IMU values differ from the previous row of the same epoch t = {}",
-                            v[0]
-                        ),
-                    ));
+                    return Err(TightError::new(format!("line {lno}: gx..az"), format!("IMU values differ from the previous row of the same epoch t = {}", v[0])));
                 }
                 if let Some(o) = obs {
                     last.pr.push(o);
                 }
             }
-            _ => rows.push(EpochRow {
-                t: v[0],
-                gyro: [v[1], v[2], v[3]],
-                accel: [v[4], v[5], v[6]],
-                pr: obs.into_iter().collect(),
-            }),
+            _ => rows.push(EpochRow { t: v[0], gyro: [v[1], v[2], v[3]], accel: [v[4], v[5], v[6]], pr: obs.into_iter().collect() }),
         }
     }
     Ok(rows)
@@ -669,10 +511,7 @@ fn parse_long<'a>(
 /// Write rows in the `pr_<prn>` CSV format (columns for every satellite
 /// that appears; empty cell where a row has no pseudo-range for it).
 pub fn to_csv(rows: &[EpochRow]) -> String {
-    let mut prns: Vec<u8> = rows
-        .iter()
-        .flat_map(|r| r.pr.iter().map(|o| o.prn))
-        .collect();
+    let mut prns: Vec<u8> = rows.iter().flat_map(|r| r.pr.iter().map(|o| o.prn)).collect();
     prns.sort_unstable();
     prns.dedup();
     let mut s = String::from("t,gx,gy,gz,ax,ay,az");
@@ -681,10 +520,7 @@ pub fn to_csv(rows: &[EpochRow]) -> String {
     }
     s.push('\n');
     for r in rows {
-        s.push_str(&format!(
-            "{},{},{},{},{},{},{}",
-            r.t, r.gyro[0], r.gyro[1], r.gyro[2], r.accel[0], r.accel[1], r.accel[2]
-        ));
+        s.push_str(&format!("{},{},{},{},{},{},{}", r.t, r.gyro[0], r.gyro[1], r.gyro[2], r.accel[0], r.accel[1], r.accel[2]));
         for p in &prns {
             match r.pr.iter().find(|o| o.prn == *p) {
                 Some(o) => s.push_str(&format!(",{}", o.pr)),
@@ -706,13 +542,7 @@ mod tests {
         let rows = parse_csv(text).unwrap();
         assert_eq!(rows.len(), 2);
         assert!(rows[0].pr.is_empty());
-        assert_eq!(
-            rows[1].pr,
-            vec![PrObs {
-                prn: 3,
-                pr: 20000000.5
-            }]
-        );
+        assert_eq!(rows[1].pr, vec![PrObs { prn: 3, pr: 20000000.5 }]);
         assert_eq!(rows[1].accel, [0.1, 0.0, -9.8]);
         let again = parse_csv(&to_csv(&rows)).unwrap();
         assert_eq!(again, rows);
@@ -724,26 +554,11 @@ mod tests {
         let rows = parse_csv(text).unwrap();
         assert_eq!(rows.len(), 2);
         assert!(rows[0].pr.is_empty());
-        assert_eq!(
-            rows[1].pr,
-            vec![
-                PrObs {
-                    prn: 3,
-                    pr: 20000000.5
-                },
-                PrObs {
-                    prn: 17,
-                    pr: 21000000.0
-                }
-            ]
-        );
+        assert_eq!(rows[1].pr, vec![PrObs { prn: 3, pr: 20000000.5 }, PrObs { prn: 17, pr: 21000000.0 }]);
         // Same as the wide layout.
         let wide = parse_csv("t,gx,gy,gz,ax,ay,az,pr_3,pr_17\n0.05,0,0,0,0,0,-9.8,,\n1,0,0,0,0,0,-9.8,20000000.5,21000000\n").unwrap();
         assert_eq!(rows, wide);
-        let e = parse_csv(
-            "t,gx,gy,gz,ax,ay,az,sat_id,pr\n1,0,0,0,0,0,-9.8,3,2e7\n1,0,0,0,0.5,0,-9.8,4,2e7\n",
-        )
-        .unwrap_err();
+        let e = parse_csv("t,gx,gy,gz,ax,ay,az,sat_id,pr\n1,0,0,0,0,0,-9.8,3,2e7\n1,0,0,0,0.5,0,-9.8,4,2e7\n").unwrap_err();
         assert!(e.field.contains("line 3"), "{e}");
         let e = parse_csv("t,gx,gy,gz,ax,ay,az,sat_id,pr\n1,0,0,0,0,0,-9.8,G7,2e7\n").unwrap_err();
         assert_eq!(e.field, "line 2: sat_id");
@@ -769,53 +584,20 @@ mod tests {
     #[test]
     fn push_rejects_bad_rows() {
         let mut d = TightDetector::new(TightConfig::default()).unwrap();
-        let row = EpochRow {
-            t: 1.0,
-            gyro: [0.0; 3],
-            accel: [0.0, 0.0, -9.8],
-            pr: vec![PrObs { prn: 40, pr: 2.1e7 }],
-        };
+        let row = EpochRow { t: 1.0, gyro: [0.0; 3], accel: [0.0, 0.0, -9.8], pr: vec![PrObs { prn: 40, pr: 2.1e7 }] };
         let e = d.push(&row).unwrap_err();
         assert_eq!(e.field, "pr_40");
-        let row = EpochRow {
-            pr: vec![PrObs {
-                prn: 4,
-                pr: f64::NAN,
-            }],
-            ..row
-        };
+        let row = EpochRow { pr: vec![PrObs { prn: 4, pr: f64::NAN }], ..row };
         assert_eq!(d.push(&row).unwrap_err().field, "pr_4");
-        let row = EpochRow {
-            t: f64::INFINITY,
-            pr: vec![],
-            ..row
-        };
+        let row = EpochRow { t: f64::INFINITY, pr: vec![], ..row };
         assert_eq!(d.push(&row).unwrap_err().field, "t");
-        let ok = EpochRow {
-            t: 2.0,
-            gyro: [0.0; 3],
-            accel: [0.0, 0.0, -9.8],
-            pr: vec![],
-        };
+        let ok = EpochRow { t: 2.0, gyro: [0.0; 3], accel: [0.0, 0.0, -9.8], pr: vec![] };
         assert_eq!(d.push(&ok).unwrap().status, Status::Initializing);
-        let back = EpochRow {
-            t: 1.5,
-            ..ok.clone()
-        };
+        let back = EpochRow { t: 1.5, ..ok.clone() };
         assert_eq!(d.push(&back).unwrap_err().field, "t");
-        let bad_imu = EpochRow {
-            t: 3.0,
-            gyro: [0.0, f64::NAN, 0.0],
-            ..ok
-        };
+        let bad_imu = EpochRow { t: 3.0, gyro: [0.0, f64::NAN, 0.0], ..ok };
         assert_eq!(d.push(&bad_imu).unwrap_err().field, "gy");
-        let cfg = TightConfig {
-            alpha: 2.0,
-            ..TightConfig::default()
-        };
-        assert_eq!(
-            TightDetector::new(cfg).err().map(|e| e.field),
-            Some("alpha".to_string())
-        );
+        let cfg = TightConfig { alpha: 2.0, ..TightConfig::default() };
+        assert_eq!(TightDetector::new(cfg).err().map(|e| e.field), Some("alpha".to_string()));
     }
 }

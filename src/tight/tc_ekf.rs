@@ -56,11 +56,7 @@ pub fn quat_exp(w: &Vector3<f64>) -> UnitQuaternion<f64> {
 /// Small-angle vector φ with `a ≈ (I + [φ×]) b` (rotation matrices).
 pub fn attitude_error(a: &Matrix3<f64>, b: &Matrix3<f64>) -> Vector3<f64> {
     let m = a * b.transpose();
-    Vector3::new(
-        0.5 * (m[(2, 1)] - m[(1, 2)]),
-        0.5 * (m[(0, 2)] - m[(2, 0)]),
-        0.5 * (m[(1, 0)] - m[(0, 1)]),
-    )
+    Vector3::new(0.5 * (m[(2, 1)] - m[(1, 2)]), 0.5 * (m[(0, 2)] - m[(2, 0)]), 0.5 * (m[(1, 0)] - m[(0, 1)]))
 }
 
 /// Kinematic navigation state plus sensor and clock states.
@@ -201,10 +197,7 @@ impl EkfConfig {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(TightError::new(
-                    f,
-                    format!("must be finite and > 0, got {v}"),
-                ))
+                Err(TightError::new(f, format!("must be finite and > 0, got {v}")))
             }
         };
         pos("imu.gyro_arw", self.imu.gyro_arw)?;
@@ -302,11 +295,7 @@ impl TcEkf {
     pub fn new(x0: NavState, cfg: EkfConfig) -> Result<Self, TightError> {
         cfg.check()?;
         let s = cfg.init_sigma.as_vector();
-        Ok(TcEkf {
-            x: x0,
-            p: Mat17::from_diagonal(&s.component_mul(&s)),
-            cfg,
-        })
+        Ok(TcEkf { x: x0, p: Mat17::from_diagonal(&s.component_mul(&s)), cfg })
     }
 
     /// Continuous-time error dynamics F (eq. 1) at the current estimate, for
@@ -317,12 +306,10 @@ impl TcEkf {
         // φ̇ = −C δb_g
         fm.fixed_view_mut::<3, 3>(ATT, BG).copy_from(&(-c));
         // δv̇ = −[(C f)×] φ − C δb_a
-        fm.fixed_view_mut::<3, 3>(VEL, ATT)
-            .copy_from(&(-skew(&(c * f))));
+        fm.fixed_view_mut::<3, 3>(VEL, ATT).copy_from(&(-skew(&(c * f))));
         fm.fixed_view_mut::<3, 3>(VEL, BA).copy_from(&(-c));
         // δṗ = δv
-        fm.fixed_view_mut::<3, 3>(POS, VEL)
-            .copy_from(&Matrix3::identity());
+        fm.fixed_view_mut::<3, 3>(POS, VEL).copy_from(&Matrix3::identity());
         // δṫ_u = δt_ru
         fm[(CLK, DRIFT)] = 1.0;
         fm
@@ -512,9 +499,7 @@ mod tests {
     #[test]
     fn attitude_error_inverts_quat_exp() {
         let phi = Vector3::new(0.01, -0.02, 0.005);
-        let b = quat_exp(&Vector3::new(0.3, 0.1, -1.0))
-            .to_rotation_matrix()
-            .into_inner();
+        let b = quat_exp(&Vector3::new(0.3, 0.1, -1.0)).to_rotation_matrix().into_inner();
         let a = quat_exp(&phi).to_rotation_matrix().into_inner() * b;
         assert_relative_eq!(attitude_error(&a, &b), phi, epsilon = 1e-5);
     }
@@ -523,17 +508,9 @@ mod tests {
     fn linearize_matches_finite_difference() {
         let ekf = TcEkf::new(state(), EkfConfig::default()).unwrap();
         let sat = Vector3::new(1.0e7, 2.0e7, -1.5e7);
-        let m = [PrMeas {
-            prn: 3,
-            pr: 3.0e7,
-            sat,
-        }];
+        let m = [PrMeas { prn: 3, pr: 3.0e7, sat }];
         let lin = ekf.linearize(&m);
-        assert_relative_eq!(
-            lin.predicted[0],
-            (sat - ekf.x.p).norm() + 50.0,
-            epsilon = 1e-6
-        );
+        assert_relative_eq!(lin.predicted[0], (sat - ekf.x.p).norm() + 50.0, epsilon = 1e-6);
         assert_relative_eq!(lin.v[0], 3.0e7 - lin.predicted[0], epsilon = 1e-6);
         // δρ ≈ H δx for δp = (1, 2, −3) m, δt_u = 4 m.
         let mut e2 = ekf.clone();
@@ -556,22 +533,14 @@ mod tests {
         let mut ekf = TcEkf::new(state(), EkfConfig::default()).unwrap();
         let sat = Vector3::new(0.0, 0.0, -2.0e7);
         let pred = (sat - ekf.x.p).norm() + ekf.x.clk;
-        let m = [PrMeas {
-            prn: 1,
-            pr: pred + 11.8,
-            sat,
-        }];
+        let m = [PrMeas { prn: 1, pr: pred + 11.8, sat }];
         let lin = ekf.linearize(&m);
         assert_relative_eq!(lin.h[(0, POS + 2)], 1.0, epsilon = 1e-12);
         let dx = ekf.update(&lin).unwrap();
         assert_relative_eq!(dx[POS + 2], 0.9, epsilon = 1e-9);
         assert_relative_eq!(dx[CLK], 10.0, epsilon = 1e-9);
         // Posterior: P_zz = 9 − 81/118, P_clk = 100 − 10000/118.
-        assert_relative_eq!(
-            ekf.p[(POS + 2, POS + 2)],
-            9.0 - 81.0 / 118.0,
-            epsilon = 1e-9
-        );
+        assert_relative_eq!(ekf.p[(POS + 2, POS + 2)], 9.0 - 81.0 / 118.0, epsilon = 1e-9);
         assert_relative_eq!(ekf.p[(CLK, CLK)], 100.0 - 10000.0 / 118.0, epsilon = 1e-9);
         assert_relative_eq!(ekf.p[(POS + 2, CLK)], -900.0 / 118.0, epsilon = 1e-9);
     }

@@ -14,14 +14,7 @@ pub(crate) struct Adam {
 
 impl Adam {
     pub fn new(n: usize, lr: f64, b1: f64) -> Self {
-        Adam {
-            m: vec![0.0; n],
-            v: vec![0.0; n],
-            t: 0,
-            lr,
-            b1,
-            b2: 0.999,
-        }
+        Adam { m: vec![0.0; n], v: vec![0.0; n], t: 0, lr, b1, b2: 0.999 }
     }
 
     /// Re-sizes and zeroes the state for reuse (no allocation once sized).

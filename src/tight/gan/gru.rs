@@ -43,12 +43,7 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
             acc[k] += x[k] * y[k];
         }
     }
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
+    let tail: f64 = ca.remainder().iter().zip(cb.remainder()).map(|(x, y)| x * y).sum();
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
@@ -167,12 +162,9 @@ impl Gru {
             let rt = &mut cache.r[t * hd..(t + 1) * hd];
             let rh = &mut cache.rh[t * hd..(t + 1) * hd];
             for j in 0..hd {
-                let az =
-                    b[j] + dot(&w[j * id..(j + 1) * id], xt) + dot(&u[j * hd..(j + 1) * hd], hp);
+                let az = b[j] + dot(&w[j * id..(j + 1) * id], xt) + dot(&u[j * hd..(j + 1) * hd], hp);
                 let jr = hd + j;
-                let ar = b[jr]
-                    + dot(&w[jr * id..(jr + 1) * id], xt)
-                    + dot(&u[jr * hd..(jr + 1) * hd], hp);
+                let ar = b[jr] + dot(&w[jr * id..(jr + 1) * id], xt) + dot(&u[jr * hd..(jr + 1) * hd], hp);
                 zt[j] = sigmoid(az);
                 rt[j] = sigmoid(ar);
                 rh[j] = rt[j] * hp[j];
@@ -180,9 +172,7 @@ impl Gru {
             let ct = &mut cache.c[t * hd..(t + 1) * hd];
             for j in 0..hd {
                 let jc = 2 * hd + j;
-                let ac = b[jc]
-                    + dot(&w[jc * id..(jc + 1) * id], xt)
-                    + dot(&u[jc * hd..(jc + 1) * hd], rh);
+                let ac = b[jc] + dot(&w[jc * id..(jc + 1) * id], xt) + dot(&u[jc * hd..(jc + 1) * hd], rh);
                 ct[j] = libm::tanh(ac);
                 hn[j] = (1.0 - zt[j]) * hp[j] + zt[j] * ct[j];
             }
@@ -205,18 +195,7 @@ impl Gru {
         let (hd, id) = (self.hidden, self.input);
         let steps = cache.steps;
         let (w, u, _) = self.split(p);
-        let GruCache {
-            h,
-            z,
-            r,
-            c,
-            rh,
-            da,
-            dh_next,
-            dh_prev,
-            drh,
-            ..
-        } = cache;
+        let GruCache { h, z, r, c, rh, da, dh_next, dh_prev, drh, .. } = cache;
         dh_next.fill(0.0);
         for t in (0..steps).rev() {
             let xt = &x[t * id..(t + 1) * id];

@@ -116,32 +116,19 @@ impl GanConfig {
         ];
         for (name, v) in sizes {
             if v == 0 || v > MAX_SIZE {
-                return Err(TightError::new(
-                    name,
-                    format!("must be in 1..={MAX_SIZE}, got {v}"),
-                ));
+                return Err(TightError::new(name, format!("must be in 1..={MAX_SIZE}, got {v}")));
             }
         }
         if self.z_iters > 100_000 {
-            return Err(TightError::new(
-                "z_iters",
-                format!("must be ≤ 100000, got {}", self.z_iters),
-            ));
+            return Err(TightError::new("z_iters", format!("must be ≤ 100000, got {}", self.z_iters)));
         }
-        for (name, v) in [
-            ("lr_g", self.lr_g),
-            ("lr_d", self.lr_d),
-            ("z_lr", self.z_lr),
-        ] {
+        for (name, v) in [("lr_g", self.lr_g), ("lr_d", self.lr_d), ("z_lr", self.z_lr)] {
             if !(v.is_finite() && v > 0.0 && v <= 1.0) {
                 return Err(TightError::new(name, format!("must be in (0, 1], got {v}")));
             }
         }
         if !(self.z_prior.is_finite() && (0.0..=1e6).contains(&self.z_prior)) {
-            return Err(TightError::new(
-                "z_prior",
-                format!("must be in [0, 1e6], got {}", self.z_prior),
-            ));
+            return Err(TightError::new("z_prior", format!("must be in [0, 1e6], got {}", self.z_prior)));
         }
         Ok(())
     }
@@ -167,28 +154,17 @@ pub fn subsequences(y: &[f64], m: usize, w: usize, u: usize) -> Result<Vec<Vec<f
         }
     }
     if !y.len().is_multiple_of(m) {
-        return Err(TightError::new(
-            "y",
-            format!("length {} is not a multiple of m = {m}", y.len()),
-        ));
+        return Err(TightError::new("y", format!("length {} is not a multiple of m = {m}", y.len())));
     }
     if let Some(i) = y.iter().position(|v| !v.is_finite()) {
-        return Err(TightError::new(
-            format!("y[{i}]"),
-            format!("must be finite, got {}", y[i]),
-        ));
+        return Err(TightError::new(format!("y[{i}]"), format!("must be finite, got {}", y[i])));
     }
     let rows = y.len() / m;
     if rows < w {
-        return Err(TightError::new(
-            "y",
-            format!("{rows} rows, fewer than the window w = {w}"),
-        ));
+        return Err(TightError::new("y", format!("{rows} rows, fewer than the window w = {w}")));
     }
     let n = (rows - w) / u + 1;
-    Ok((0..n)
-        .map(|s| y[s * u * m..(s * u + w) * m].to_vec())
-        .collect())
+    Ok((0..n).map(|s| y[s * u * m..(s * u + w) * m].to_vec()).collect())
 }
 
 /// Per-epoch training report (means over the epoch's minibatches).

@@ -48,10 +48,7 @@ fn xavier(p: &mut [f64], fan_in: usize, fan_out: usize, rng: &mut Rng) {
 
 impl GenNet {
     pub fn gru(self) -> Gru {
-        Gru {
-            input: self.latent,
-            hidden: self.hidden,
-        }
+        Gru { input: self.latent, hidden: self.hidden }
     }
 
     pub fn len(self) -> usize {
@@ -62,12 +59,7 @@ impl GenNet {
         let mut p = vec![0.0; self.len()];
         let g = self.gru().len();
         self.gru().init(&mut p[..g], rng);
-        xavier(
-            &mut p[g..g + self.dim * self.hidden],
-            self.hidden,
-            self.dim,
-            rng,
-        );
+        xavier(&mut p[g..g + self.dim * self.hidden], self.hidden, self.dim, rng);
         p
     }
 
@@ -128,17 +120,13 @@ impl GenNet {
             }
         }
         let gg = grad.map(|g| &mut g[..gl]);
-        self.gru()
-            .backward(&p[..gl], z, &mut work.gru, &work.dh, gg, dz);
+        self.gru().backward(&p[..gl], z, &mut work.gru, &work.dh, gg, dz);
     }
 }
 
 impl DiscNet {
     pub fn gru(self) -> Gru {
-        Gru {
-            input: self.dim,
-            hidden: self.hidden,
-        }
+        Gru { input: self.dim, hidden: self.hidden }
     }
 
     pub fn len(self) -> usize {
@@ -206,7 +194,6 @@ impl DiscNet {
             }
             None => None,
         };
-        self.gru()
-            .backward(&p[..gl], x, &mut work.gru, &work.dh, gg, dx);
+        self.gru().backward(&p[..gl], x, &mut work.gru, &work.dh, gg, dx);
     }
 }

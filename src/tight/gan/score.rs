@@ -83,16 +83,10 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 /// Length and finiteness check of one input vector.
 pub(crate) fn check_vec(field: &str, v: &[f64], len: usize) -> Result<(), TightError> {
     if v.len() != len {
-        return Err(TightError::new(
-            field,
-            format!("length must be {len}, got {}", v.len()),
-        ));
+        return Err(TightError::new(field, format!("length must be {len}, got {}", v.len())));
     }
     if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-        return Err(TightError::new(
-            format!("{field}[{i}]"),
-            format!("must be finite, got {}", v[i]),
-        ));
+        return Err(TightError::new(format!("{field}[{i}]"), format!("must be finite, got {}", v[i])));
     }
     Ok(())
 }
@@ -153,18 +147,11 @@ pub(crate) fn normalised_std(v: &[f64]) -> f64 {
 
 impl GanModel {
     pub(crate) fn gen_net(cfg: &GanConfig) -> GenNet {
-        GenNet {
-            latent: cfg.latent,
-            hidden: cfg.hidden,
-            dim: cfg.dim,
-        }
+        GenNet { latent: cfg.latent, hidden: cfg.hidden, dim: cfg.dim }
     }
 
     pub(crate) fn disc_net(cfg: &GanConfig) -> DiscNet {
-        DiscNet {
-            dim: cfg.dim,
-            hidden: cfg.hidden,
-        }
+        DiscNet { dim: cfg.dim, hidden: cfg.hidden }
     }
 
     /// `G(z)`: `z` is `w × latent`, output `w × m`.
@@ -179,9 +166,7 @@ impl GanModel {
     pub fn discriminate(&self, y: &[f64]) -> Result<f64, TightError> {
         check_vec("y", y, self.cfg.window_len())?;
         let mut work = NetWork::default();
-        Ok(sigmoid(
-            Self::disc_net(&self.cfg).forward(&self.d, y, &mut work),
-        ))
+        Ok(sigmoid(Self::disc_net(&self.cfg).forward(&self.d, y, &mut work)))
     }
 
     /// Latent `z` shifted forward by `rows` time steps for warm-starting the
@@ -207,11 +192,7 @@ impl GanModel {
     /// (same draw on every call, so scores are reproducible), or from `z0`
     /// (warm start) when `z0` has the lower objective. Returns the iterate
     /// with the lowest objective, `(z_k, G(z_k), ρ(y, G(z_k)))`.
-    pub fn search_latent(
-        &self,
-        y: &[f64],
-        z0: Option<&[f64]>,
-    ) -> Result<(Vec<f64>, Vec<f64>, f64), TightError> {
+    pub fn search_latent(&self, y: &[f64], z0: Option<&[f64]>) -> Result<(Vec<f64>, Vec<f64>, f64), TightError> {
         let mut s = GanScratch::default();
         check_vec("y", y, self.cfg.window_len())?;
         self.search_inner(y, z0, &mut s)
@@ -233,8 +214,7 @@ impl GanModel {
             // Keep the warm start only if it beats the cold draw.
             let obj = |z: &[f64], w: &mut NetWork| {
                 gn.forward(&self.g, z, w);
-                1.0 - correlation(y, &w.y, None)
-                    + 0.5 * gamma * z.iter().map(|v| v * v).sum::<f64>()
+                1.0 - correlation(y, &w.y, None) + 0.5 * gamma * z.iter().map(|v| v * v).sum::<f64>()
             };
             if obj(z0, &mut s.gen) <= obj(&z, &mut s.gen) {
                 z.copy_from_slice(z0);
@@ -280,33 +260,15 @@ impl GanModel {
     }
 
     /// [`GanModel::score`] with caller-owned buffers.
-    pub fn score_with(
-        &self,
-        y: &[f64],
-        z0: Option<&[f64]>,
-        s: &mut GanScratch,
-    ) -> Result<Score, TightError> {
+    pub fn score_with(&self, y: &[f64], z0: Option<&[f64]>, s: &mut GanScratch) -> Result<Score, TightError> {
         check_vec("y", y, self.cfg.window_len())?;
         let d = sigmoid(Self::disc_net(&self.cfg).forward(&self.d, y, &mut s.disc));
         let (z, generated, corr) = self.search_inner(y, z0, s)?;
-        let gs = libm::sqrt(
-            y.iter()
-                .zip(&generated)
-                .map(|(a, b)| (a - b) * (a - b))
-                .sum::<f64>(),
-        );
+        let gs = libm::sqrt(y.iter().zip(&generated).map(|(a, b)| (a - b) * (a - b)).sum::<f64>());
         let range = (self.rg_max - self.rg_min).max(1e-12);
         let gs_norm = (gs - self.rg_min) / range;
         let score = self.lambda * gs_norm + (1.0 - self.lambda) * (1.0 - d);
-        Ok(Score {
-            gs,
-            gs_norm,
-            d,
-            score,
-            z,
-            generated,
-            corr,
-        })
+        Ok(Score { gs, gs_norm, d, score, z, generated, corr })
     }
 
     /// Scores consecutive windows (as [`super::subsequences`] produces them),
@@ -337,28 +299,14 @@ impl GanModel {
     /// (scored as a stream, see [`GanModel::score_stream`]): fits the H0
     /// normal `N(μ, σ)` and the empirical quantile; stores the larger (see
     /// [`Threshold::t2`]).
-    pub fn calibrate(
-        &mut self,
-        fault_free: &[Vec<f64>],
-        alpha: f64,
-    ) -> Result<Threshold, TightError> {
+    pub fn calibrate(&mut self, fault_free: &[Vec<f64>], alpha: f64) -> Result<Threshold, TightError> {
         if !(alpha > 0.0 && alpha < 1.0) {
-            return Err(TightError::new(
-                "alpha",
-                format!("must be in (0, 1), got {alpha}"),
-            ));
+            return Err(TightError::new("alpha", format!("must be in (0, 1), got {alpha}")));
         }
         if fault_free.len() < 2 {
-            return Err(TightError::new(
-                "fault_free",
-                format!("need ≥ 2 windows, got {}", fault_free.len()),
-            ));
+            return Err(TightError::new("fault_free", format!("need ≥ 2 windows, got {}", fault_free.len())));
         }
-        let mut sc: Vec<f64> = self
-            .score_stream(fault_free)?
-            .iter()
-            .map(|s| s.score)
-            .collect();
+        let mut sc: Vec<f64> = self.score_stream(fault_free)?.iter().map(|s| s.score).collect();
         let n = sc.len();
         let mu = sc.iter().sum::<f64>() / n as f64;
         let sigma = sample_std(&sc);
@@ -369,29 +317,15 @@ impl GanModel {
         let t2 = t2_normal.max(t2_empirical);
         let false_alarm = sc.iter().filter(|&&v| v > t2).count() as f64 / n as f64;
         self.t2 = t2;
-        Ok(Threshold {
-            alpha,
-            mu,
-            sigma,
-            t2_normal,
-            t2_empirical,
-            t2,
-            false_alarm,
-            n,
-        })
+        Ok(Threshold { alpha, mu, sigma, t2_normal, t2_empirical, t2, false_alarm, n })
     }
 
     /// `"NGGAN"`, version byte, payload length (u32 LE), FNV-1a 64 of the
     /// payload (u64 LE), then the postcard payload.
     pub fn to_bytes(&self) -> Result<Vec<u8>, TightError> {
-        let payload = postcard::to_allocvec(self)
-            .map_err(|e| TightError::new("model", format!("serialize: {e}")))?;
-        let len = u32::try_from(payload.len()).map_err(|_| {
-            TightError::new(
-                "model",
-                format!("payload too large: {} bytes", payload.len()),
-            )
-        })?;
+        let payload = postcard::to_allocvec(self).map_err(|e| TightError::new("model", format!("serialize: {e}")))?;
+        let len = u32::try_from(payload.len())
+            .map_err(|_| TightError::new("model", format!("payload too large: {} bytes", payload.len())))?;
         let mut out = Vec::with_capacity(HEADER + payload.len());
         out.extend_from_slice(MAGIC);
         out.push(VERSION);
@@ -407,46 +341,28 @@ impl GanModel {
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, TightError> {
         let field = "bytes";
         if bytes.len() < HEADER {
-            return Err(TightError::new(
-                field,
-                format!(
-                    "{} bytes, shorter than the {HEADER}-byte header",
-                    bytes.len()
-                ),
-            ));
+            return Err(TightError::new(field, format!("{} bytes, shorter than the {HEADER}-byte header", bytes.len())));
         }
         let (head, payload) = bytes.split_at(HEADER);
         if &head[..5] != MAGIC {
-            return Err(TightError::new(
-                field,
-                format!("bad magic {:?}", &head[..5]),
-            ));
+            return Err(TightError::new(field, format!("bad magic {:?}", &head[..5])));
         }
         if head[5] != VERSION {
-            return Err(TightError::new(
-                field,
-                format!("unsupported version {}, expected {VERSION}", head[5]),
-            ));
+            return Err(TightError::new(field, format!("unsupported version {}, expected {VERSION}", head[5])));
         }
         let mut len4 = [0u8; 4];
         len4.copy_from_slice(&head[6..10]);
         let len = u32::from_le_bytes(len4) as usize;
         if payload.len() != len {
-            return Err(TightError::new(
-                field,
-                format!("payload is {} bytes, header says {len}", payload.len()),
-            ));
+            return Err(TightError::new(field, format!("payload is {} bytes, header says {len}", payload.len())));
         }
         let mut sum8 = [0u8; 8];
         sum8.copy_from_slice(&head[10..18]);
         if fnv1a(payload) != u64::from_le_bytes(sum8) {
-            return Err(TightError::new(
-                field,
-                "checksum mismatch (damaged payload)",
-            ));
+            return Err(TightError::new(field, "checksum mismatch (damaged payload)"));
         }
-        let m: GanModel = postcard::from_bytes(payload)
-            .map_err(|e| TightError::new(field, format!("decode: {e}")))?;
+        let m: GanModel =
+            postcard::from_bytes(payload).map_err(|e| TightError::new(field, format!("decode: {e}")))?;
         m.validate()?;
         Ok(m)
     }
@@ -457,30 +373,18 @@ impl GanModel {
         check_vec("g", &self.g, Self::gen_net(&self.cfg).len())?;
         check_vec("d", &self.d, Self::disc_net(&self.cfg).len())?;
         if !(0.0..=1.0).contains(&self.lambda) {
-            return Err(TightError::new(
-                "lambda",
-                format!("must be in [0, 1], got {}", self.lambda),
-            ));
+            return Err(TightError::new("lambda", format!("must be in [0, 1], got {}", self.lambda)));
         }
         if !(self.rg_min.is_finite() && self.rg_max.is_finite() && self.rg_min <= self.rg_max) {
-            return Err(TightError::new(
-                "rg_range",
-                format!("bad range [{}, {}]", self.rg_min, self.rg_max),
-            ));
+            return Err(TightError::new("rg_range", format!("bad range [{}, {}]", self.rg_min, self.rg_max)));
         }
         for (name, v) in [("s_g", self.s_g), ("s_d", self.s_d)] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(TightError::new(
-                    name,
-                    format!("must be finite and ≥ 0, got {v}"),
-                ));
+                return Err(TightError::new(name, format!("must be finite and ≥ 0, got {v}")));
             }
         }
         if self.t2.is_nan() || self.t2 == f64::NEG_INFINITY {
-            return Err(TightError::new(
-                "t2",
-                format!("must be finite or +inf, got {}", self.t2),
-            ));
+            return Err(TightError::new("t2", format!("must be finite or +inf, got {}", self.t2)));
         }
         Ok(())
     }

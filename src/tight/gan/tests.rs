@@ -13,27 +13,14 @@ fn randv(n: usize, rng: &mut Rng) -> Vec<f64> {
 
 /// ‖a − b‖ / (‖a‖ + ‖b‖): relative error of a gradient block.
 fn rel_err(a: &[f64], b: &[f64]) -> f64 {
-    let d = a
-        .iter()
-        .zip(b)
-        .map(|(x, y)| (x - y).powi(2))
-        .sum::<f64>()
-        .sqrt();
-    let n =
-        a.iter().map(|x| x * x).sum::<f64>().sqrt() + b.iter().map(|x| x * x).sum::<f64>().sqrt();
-    assert!(
-        n > 1e-8,
-        "gradient block is zero: the check would be vacuous"
-    );
+    let d = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt();
+    let n = a.iter().map(|x| x * x).sum::<f64>().sqrt() + b.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!(n > 1e-8, "gradient block is zero: the check would be vacuous");
     d / n
 }
 
 /// Central differences of `f` over the coordinates `range` of `x`.
-fn numeric(
-    x: &mut [f64],
-    range: core::ops::Range<usize>,
-    f: &mut dyn FnMut(&[f64]) -> f64,
-) -> Vec<f64> {
+fn numeric(x: &mut [f64], range: core::ops::Range<usize>, f: &mut dyn FnMut(&[f64]) -> f64) -> Vec<f64> {
     let h = 1e-6;
     range
         .map(|i| {
@@ -50,10 +37,7 @@ fn numeric(
 
 #[test]
 fn gru_backward_matches_finite_differences() {
-    let gru = Gru {
-        input: 3,
-        hidden: 4,
-    };
+    let gru = Gru { input: 3, hidden: 4 };
     let steps = 5;
     let mut rng = Rng::new(7);
     let mut p = vec![0.0; gru.len()];
@@ -104,11 +88,7 @@ fn gru_backward_matches_finite_differences() {
 
 #[test]
 fn generator_backward_matches_finite_differences() {
-    let gn = GenNet {
-        latent: 3,
-        hidden: 4,
-        dim: 2,
-    };
+    let gn = GenNet { latent: 3, hidden: 4, dim: 2 };
     let steps = 5;
     let mut rng = Rng::new(11);
     let mut p = gn.init(&mut rng);
@@ -130,11 +110,7 @@ fn generator_backward_matches_finite_differences() {
     gn.backward(&p, &z, &mut w, &c, Some(&mut grad), Some(&mut dz));
     let gl = gn.gru().len();
     let zc = z.clone();
-    for (name, a, b) in [
-        ("gru", 0, gl),
-        ("W_o", gl, gl + gn.dim * gn.hidden),
-        ("b_o", gl + gn.dim * gn.hidden, plen),
-    ] {
+    for (name, a, b) in [("gru", 0, gl), ("W_o", gl, gl + gn.dim * gn.hidden), ("b_o", gl + gn.dim * gn.hidden, plen)] {
         let num = numeric(&mut p, a..b, &mut |pp| loss(pp, &zc));
         let e = rel_err(&grad[a..b], &num);
         println!("generator {name}: rel err {e:.2e}");
@@ -194,22 +170,10 @@ fn discriminator_bce_backward_matches_finite_differences() {
 fn correlation_and_gradient() {
     // Exact values: perfectly (anti-)correlated and a hand-computed case.
     let y = [1.0, 2.0, 3.0, 4.0];
-    assert_relative_eq!(
-        correlation(&y, &[2.0, 4.0, 6.0, 8.0], None),
-        1.0,
-        epsilon = 1e-14
-    );
-    assert_relative_eq!(
-        correlation(&y, &[5.0, 3.0, 1.0, -1.0], None),
-        -1.0,
-        epsilon = 1e-14
-    );
+    assert_relative_eq!(correlation(&y, &[2.0, 4.0, 6.0, 8.0], None), 1.0, epsilon = 1e-14);
+    assert_relative_eq!(correlation(&y, &[5.0, 3.0, 1.0, -1.0], None), -1.0, epsilon = 1e-14);
     // a = (−1.5,−.5,.5,1.5), b = (−1,1,−1,1) − 0: a·b = 2, ‖a‖² = 5, ‖b‖² = 4.
-    assert_relative_eq!(
-        correlation(&y, &[0.0, 2.0, 0.0, 2.0], None),
-        2.0 / (5.0f64 * 4.0).sqrt(),
-        epsilon = 1e-14
-    );
+    assert_relative_eq!(correlation(&y, &[0.0, 2.0, 0.0, 2.0], None), 2.0 / (5.0f64 * 4.0).sqrt(), epsilon = 1e-14);
     // Constant side: defined as 0 with zero gradient.
     let mut gr = [9.0; 4];
     assert_eq!(correlation(&y, &[3.0; 4], Some(&mut gr)), 0.0);
@@ -229,13 +193,7 @@ fn correlation_and_gradient() {
 /// Λ through the generator w.r.t. z (the latent-search gradient).
 #[test]
 fn latent_search_gradient_matches_finite_differences() {
-    let cfg = GanConfig {
-        window: 6,
-        dim: 2,
-        latent: 3,
-        hidden: 5,
-        ..GanConfig::default()
-    };
+    let cfg = GanConfig { window: 6, dim: 2, latent: 3, hidden: 5, ..GanConfig::default() };
     let gn = GanModel::gen_net(&cfg);
     let mut rng = Rng::new(5);
     let p = gn.init(&mut rng);
@@ -284,83 +242,17 @@ fn subsequences_shapes_and_errors() {
 fn config_errors_name_the_field() {
     assert!(GanConfig::default().check().is_ok());
     let cases: Vec<(&str, GanConfig)> = vec![
-        (
-            "window",
-            GanConfig {
-                window: 0,
-                ..Default::default()
-            },
-        ),
-        (
-            "step",
-            GanConfig {
-                step: 0,
-                ..Default::default()
-            },
-        ),
-        (
-            "dim",
-            GanConfig {
-                dim: 0,
-                ..Default::default()
-            },
-        ),
-        (
-            "latent",
-            GanConfig {
-                latent: MAX_SIZE + 1,
-                ..Default::default()
-            },
-        ),
-        (
-            "hidden",
-            GanConfig {
-                hidden: 0,
-                ..Default::default()
-            },
-        ),
-        (
-            "epochs",
-            GanConfig {
-                epochs: 0,
-                ..Default::default()
-            },
-        ),
-        (
-            "batch",
-            GanConfig {
-                batch: 0,
-                ..Default::default()
-            },
-        ),
-        (
-            "lr_g",
-            GanConfig {
-                lr_g: f64::NAN,
-                ..Default::default()
-            },
-        ),
-        (
-            "lr_d",
-            GanConfig {
-                lr_d: -1e-3,
-                ..Default::default()
-            },
-        ),
-        (
-            "z_lr",
-            GanConfig {
-                z_lr: 0.0,
-                ..Default::default()
-            },
-        ),
-        (
-            "z_iters",
-            GanConfig {
-                z_iters: 1_000_000,
-                ..Default::default()
-            },
-        ),
+        ("window", GanConfig { window: 0, ..Default::default() }),
+        ("step", GanConfig { step: 0, ..Default::default() }),
+        ("dim", GanConfig { dim: 0, ..Default::default() }),
+        ("latent", GanConfig { latent: MAX_SIZE + 1, ..Default::default() }),
+        ("hidden", GanConfig { hidden: 0, ..Default::default() }),
+        ("epochs", GanConfig { epochs: 0, ..Default::default() }),
+        ("batch", GanConfig { batch: 0, ..Default::default() }),
+        ("lr_g", GanConfig { lr_g: f64::NAN, ..Default::default() }),
+        ("lr_d", GanConfig { lr_d: -1e-3, ..Default::default() }),
+        ("z_lr", GanConfig { z_lr: 0.0, ..Default::default() }),
+        ("z_iters", GanConfig { z_iters: 1_000_000, ..Default::default() }),
     ];
     for (field, cfg) in cases {
         let e = cfg.check().unwrap_err();
@@ -369,19 +261,10 @@ fn config_errors_name_the_field() {
         assert_eq!(e2.field, field);
     }
     // Window shape errors name the window.
-    let cfg = GanConfig {
-        window: 2,
-        dim: 2,
-        ..Default::default()
-    };
+    let cfg = GanConfig { window: 2, dim: 2, ..Default::default() };
     let e = train(&[vec![0.0; 4], vec![0.0; 3]], &cfg, &mut |_| true).unwrap_err();
     assert_eq!(e.field, "windows[1]");
-    let e = train(
-        &[vec![0.0; 4], vec![0.0, f64::INFINITY, 0.0, 0.0]],
-        &cfg,
-        &mut |_| true,
-    )
-    .unwrap_err();
+    let e = train(&[vec![0.0; 4], vec![0.0, f64::INFINITY, 0.0, 0.0]], &cfg, &mut |_| true).unwrap_err();
     assert_eq!(e.field, "windows[1][1]");
 }
 
@@ -423,10 +306,7 @@ fn moments(ws: &[Vec<f64>]) -> (f64, f64) {
     let all: Vec<f64> = ws.iter().flatten().copied().collect();
     let n = all.len() as f64;
     let m = all.iter().sum::<f64>() / n;
-    (
-        m,
-        (all.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt(),
-    )
+    (m, (all.iter().map(|v| (v - m).powi(2)).sum::<f64>() / n).sqrt())
 }
 
 #[test]
@@ -449,14 +329,8 @@ fn training_learns_the_process_and_detects_shifts() {
 
     // Generator moments vs data, trained vs untrained (epoch-0 weights).
     let mut rng = Rng::new(99);
-    let zs: Vec<Vec<f64>> = (0..200)
-        .map(|_| randv(cfg.latent_len(), &mut rng))
-        .collect();
-    let gen = |m: &GanModel| {
-        zs.iter()
-            .map(|z| m.generate(z).unwrap())
-            .collect::<Vec<_>>()
-    };
+    let zs: Vec<Vec<f64>> = (0..200).map(|_| randv(cfg.latent_len(), &mut rng)).collect();
+    let gen = |m: &GanModel| zs.iter().map(|z| m.generate(z).unwrap()).collect::<Vec<_>>();
     let mut untrained = model.clone();
     let mut r0 = Rng::new(cfg.seed);
     untrained.g = GanModel::gen_net(&cfg).init(&mut r0);
@@ -465,28 +339,14 @@ fn training_learns_the_process_and_detects_shifts() {
     let (um, us) = moments(&gen(&untrained));
     let err_t = (gm - dm).abs() + (gs - ds).abs();
     let err_u = (um - dm).abs() + (us - ds).abs();
-    println!(
-        "data mean {dm:.3} std {ds:.3}; trained G {gm:.3}/{gs:.3}; untrained G {um:.3}/{us:.3}"
-    );
+    println!("data mean {dm:.3} std {ds:.3}; trained G {gm:.3}/{gs:.3}; untrained G {um:.3}/{us:.3}");
     assert!(err_t < 0.5 * err_u, "trained {err_t} vs untrained {err_u}");
 
     // D on real data in a sane band (neither collapsed nor saturated).
-    let d_real = train_w
-        .iter()
-        .map(|w| model.discriminate(w).unwrap())
-        .sum::<f64>()
-        / train_w.len() as f64;
-    println!(
-        "mean D(real) {d_real:.3}, lambda {:.3}, (S_G, S_D) {:?}",
-        model.lambda(),
-        model.dispersions()
-    );
+    let d_real = train_w.iter().map(|w| model.discriminate(w).unwrap()).sum::<f64>() / train_w.len() as f64;
+    println!("mean D(real) {d_real:.3}, lambda {:.3}, (S_G, S_D) {:?}", model.lambda(), model.dispersions());
     assert!((0.2..0.95).contains(&d_real), "{d_real}");
-    assert!(
-        model.lambda() > 0.0 && model.lambda() < 1.0,
-        "{}",
-        model.lambda()
-    );
+    assert!(model.lambda() > 0.0 && model.lambda() < 1.0, "{}", model.lambda());
 
     // Calibrate on fresh normal data, then check held-out false alarms.
     let cal = subsequences(&sine_rows(300, 2), cfg.dim, cfg.window, cfg.step).unwrap();
@@ -497,10 +357,7 @@ fn training_learns_the_process_and_detects_shifts() {
     let hs = model.score_stream(&held).unwrap();
     let fa = hs.iter().filter(|s| model.is_fault(s)).count() as f64 / hs.len() as f64;
     let normal_mean = hs.iter().map(|s| s.score).sum::<f64>() / hs.len() as f64;
-    let rms_z = hs
-        .iter()
-        .map(|s| (s.z.iter().map(|v| v * v).sum::<f64>() / s.z.len() as f64).sqrt())
-        .sum::<f64>()
+    let rms_z = hs.iter().map(|s| (s.z.iter().map(|v| v * v).sum::<f64>() / s.z.len() as f64).sqrt()).sum::<f64>()
         / hs.len() as f64;
     let corr = hs.iter().map(|s| s.corr).sum::<f64>() / hs.len() as f64;
     println!("held-out false alarms {fa:.3}, mean score {normal_mean:.3}, mean corr {corr:.3}, mean rms z {rms_z:.2}");
@@ -511,10 +368,7 @@ fn training_learns_the_process_and_detects_shifts() {
     assert!(fa <= 0.12, "{fa}");
 
     // +1.5σ mean shift: higher scores on average.
-    let shifted: Vec<Vec<f64>> = held
-        .iter()
-        .map(|w| w.iter().map(|v| v + 1.5).collect())
-        .collect();
+    let shifted: Vec<Vec<f64>> = held.iter().map(|w| w.iter().map(|v| v + 1.5).collect()).collect();
     let ss = model.score_stream(&shifted).unwrap();
     let shift_mean = ss.iter().map(|s| s.score).sum::<f64>() / ss.len() as f64;
     let det = ss.iter().filter(|s| model.is_fault(s)).count() as f64 / ss.len() as f64;
@@ -522,10 +376,7 @@ fn training_learns_the_process_and_detects_shifts() {
     let shift_gs = ss.iter().map(|s| s.gs_norm).sum::<f64>() / ss.len() as f64;
     let norm_gs = hs.iter().map(|s| s.gs_norm).sum::<f64>() / hs.len() as f64;
     println!("shifted mean score {shift_mean:.3}, detection rate {det:.3}; D {shift_d:.3} vs {d_real:.3}, gs_norm {shift_gs:.3} vs {norm_gs:.3}");
-    assert!(
-        shift_mean > normal_mean + 0.1,
-        "{shift_mean} vs {normal_mean}"
-    );
+    assert!(shift_mean > normal_mean + 0.1, "{shift_mean} vs {normal_mean}");
 }
 
 // ---------------------------------------------------------------------------
@@ -561,11 +412,7 @@ fn determinism_same_seed_bit_identical() {
     assert_eq!(bits(&a.d), bits(&b.d));
     assert_eq!(a.lambda.to_bits(), b.lambda.to_bits());
     let (c, _) = tiny_model(9);
-    assert_ne!(
-        bits(&a.g),
-        bits(&c.g),
-        "a different seed must give different weights"
-    );
+    assert_ne!(bits(&a.g), bits(&c.g), "a different seed must give different weights");
 }
 
 #[test]
@@ -595,24 +442,10 @@ fn cancel_and_lambda_and_input_errors() {
     let s = m.score(&w[0], None).unwrap();
     assert!(!m.is_fault(&s));
     assert_eq!(m.t2(), f64::INFINITY);
-    assert_relative_eq!(
-        s.score,
-        m.lambda() * s.gs_norm + (1.0 - m.lambda()) * (1.0 - s.d),
-        epsilon = 1e-15
-    );
-    let gs = s
-        .generated
-        .iter()
-        .zip(&w[0])
-        .map(|(a, b)| (a - b).powi(2))
-        .sum::<f64>()
-        .sqrt();
+    assert_relative_eq!(s.score, m.lambda() * s.gs_norm + (1.0 - m.lambda()) * (1.0 - s.d), epsilon = 1e-15);
+    let gs = s.generated.iter().zip(&w[0]).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
     assert_relative_eq!(s.gs, gs, epsilon = 1e-12);
-    assert_relative_eq!(
-        s.corr,
-        correlation(&w[0], &s.generated, None),
-        epsilon = 1e-15
-    );
+    assert_relative_eq!(s.corr, correlation(&w[0], &s.generated, None), epsilon = 1e-15);
     assert_eq!(s.generated, m.generate(&s.z).unwrap());
     assert_relative_eq!(s.d, m.discriminate(&w[0]).unwrap(), epsilon = 1e-15);
 
@@ -631,10 +464,7 @@ fn cancel_and_lambda_and_input_errors() {
 
     // Shift: row t ← row t+1, last row repeated (latent = 2).
     let z: Vec<f64> = (0..12).map(f64::from).collect();
-    assert_eq!(
-        m.shift_latent(&z, 1).unwrap(),
-        vec![2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 10., 11.]
-    );
+    assert_eq!(m.shift_latent(&z, 1).unwrap(), vec![2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 10., 11.]);
     assert_eq!(m.shift_latent(&z, 9).unwrap(), [10., 11.].repeat(6));
     // Warm start is honoured when it is the better start: the search from
     // its own optimum cannot get worse than that optimum.
@@ -658,64 +488,32 @@ fn serialization_round_trip_and_damage() {
     }
     // Every truncation errors (never panics).
     for n in 0..bytes.len() {
-        assert!(
-            GanModel::from_bytes(&bytes[..n]).is_err(),
-            "truncated to {n}"
-        );
+        assert!(GanModel::from_bytes(&bytes[..n]).is_err(), "truncated to {n}");
     }
     let mut b = bytes.clone();
     b[0] ^= 0xFF;
-    assert!(GanModel::from_bytes(&b)
-        .unwrap_err()
-        .message
-        .contains("magic"));
+    assert!(GanModel::from_bytes(&b).unwrap_err().message.contains("magic"));
     let mut b = bytes.clone();
     b[5] = 9;
-    assert!(GanModel::from_bytes(&b)
-        .unwrap_err()
-        .message
-        .contains("version"));
+    assert!(GanModel::from_bytes(&b).unwrap_err().message.contains("version"));
     let mut b = bytes.clone();
     b.push(0);
     assert!(GanModel::from_bytes(&b).is_err());
     let mut b = bytes.clone();
     let k = b.len() - 3;
     b[k] ^= 0x10;
-    assert!(GanModel::from_bytes(&b)
-        .unwrap_err()
-        .message
-        .contains("checksum"));
+    assert!(GanModel::from_bytes(&b).unwrap_err().message.contains("checksum"));
     // Valid envelope, wrong weight shape or bad values: rejected by validation.
     let mut bad = m.clone();
     bad.g.pop();
-    assert_eq!(
-        GanModel::from_bytes(&bad.to_bytes().unwrap())
-            .unwrap_err()
-            .field,
-        "g"
-    );
+    assert_eq!(GanModel::from_bytes(&bad.to_bytes().unwrap()).unwrap_err().field, "g");
     let mut bad = m.clone();
     bad.d[0] = f64::NAN;
-    assert_eq!(
-        GanModel::from_bytes(&bad.to_bytes().unwrap())
-            .unwrap_err()
-            .field,
-        "d[0]"
-    );
+    assert_eq!(GanModel::from_bytes(&bad.to_bytes().unwrap()).unwrap_err().field, "d[0]");
     let mut bad = m.clone();
     bad.cfg.hidden = 0;
-    assert_eq!(
-        GanModel::from_bytes(&bad.to_bytes().unwrap())
-            .unwrap_err()
-            .field,
-        "hidden"
-    );
+    assert_eq!(GanModel::from_bytes(&bad.to_bytes().unwrap()).unwrap_err().field, "hidden");
     let mut bad = m.clone();
     bad.lambda = 1.5;
-    assert_eq!(
-        GanModel::from_bytes(&bad.to_bytes().unwrap())
-            .unwrap_err()
-            .field,
-        "lambda"
-    );
+    assert_eq!(GanModel::from_bytes(&bad.to_bytes().unwrap()).unwrap_err().field, "lambda");
 }

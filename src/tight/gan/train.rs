@@ -42,10 +42,7 @@ pub fn train(
 ) -> Result<GanModel, TightError> {
     cfg.check()?;
     if windows.len() < 2 {
-        return Err(TightError::new(
-            "windows",
-            format!("need ≥ 2 windows, got {}", windows.len()),
-        ));
+        return Err(TightError::new("windows", format!("need ≥ 2 windows, got {}", windows.len())));
     }
     for (i, w) in windows.iter().enumerate() {
         check_vec(&format!("windows[{i}]"), w, cfg.window_len())?;
@@ -113,16 +110,10 @@ pub fn train(
             d_fake: d_fake / n,
         };
         if !rep.d_loss.is_finite() || !rep.g_loss.is_finite() {
-            return Err(TightError::new(
-                "train",
-                format!("diverged at epoch {epoch} (non-finite loss)"),
-            ));
+            return Err(TightError::new("train", format!("diverged at epoch {epoch} (non-finite loss)")));
         }
         if !progress(&rep) {
-            return Err(TightError::new(
-                "progress",
-                format!("training cancelled after epoch {epoch}"),
-            ));
+            return Err(TightError::new("progress", format!("training cancelled after epoch {epoch}")));
         }
     }
     let mut model = GanModel {
@@ -136,9 +127,7 @@ pub fn train(
         s_d: 0.0,
         t2: f64::INFINITY,
     };
-    model
-        .validate()
-        .map_err(|e| TightError::new("train", format!("diverged: {e}")))?;
+    model.validate().map_err(|e| TightError::new("train", format!("diverged: {e}")))?;
     fit_statistics(&mut model, windows, &mut rng)?;
     Ok(model)
 }
@@ -146,11 +135,7 @@ pub fn train(
 /// §3.2 steps 1–3 and λ. `R_G` uses the detection-time latent search
 /// (stream warm starts), `S_D` the discriminator outputs `c_u` on the `n`
 /// real and `n` generated windows, `R_D = |c_u − 0.5|`.
-fn fit_statistics(
-    model: &mut GanModel,
-    windows: &[Vec<f64>],
-    rng: &mut Rng,
-) -> Result<(), TightError> {
+fn fit_statistics(model: &mut GanModel, windows: &[Vec<f64>], rng: &mut Rng) -> Result<(), TightError> {
     let scores = model.score_stream(windows)?;
     let rg: Vec<f64> = scores.iter().map(|s| s.gs).collect();
     model.rg_min = rg.iter().copied().fold(f64::INFINITY, f64::min);
