@@ -1214,7 +1214,7 @@ fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
     Ok(())
 }
 
-#[cfg(test)]
+#[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
     use proptest::prelude::*;
