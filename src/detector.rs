@@ -598,7 +598,7 @@ impl Detector {
                 match kf.predict(dt, imu.as_ref()) {
                     Ok(()) => {
                         let v1 = kf.velocity();
-                        if v1.norm() > 1.0 || -kf.position()[2] > 2.0 {
+                        if kf_flying(kf) {
                             self.flight_time += dt;
                         }
                         self.alt_int -= 0.5 * (v0[2] + v1[2]) * dt;
@@ -677,10 +677,7 @@ impl Detector {
 
     /// Flying: moving faster than 1 m/s or more than 2 m above the anchor.
     fn flying(&self) -> bool {
-        match &self.kf {
-            Some(kf) => kf.velocity().norm() > 1.0 || -kf.position()[2] > 2.0,
-            None => false,
-        }
+        self.kf.as_ref().is_some_and(kf_flying)
     }
 
     fn filter_failed(&mut self, _e: FilterError) {
@@ -1101,35 +1098,26 @@ impl Detector {
     }
 }
 
-/// Valid ranges per column: a value outside is an input error.
-fn range_of(i: usize) -> (f64, f64) {
-    range_of_const(i)
-}
-
 const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] = [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
 
-/// Lower and upper bounds per column (see `range_of`), as tables for the
-/// fast path.
-const LO: [f64; 25] = {
-    let mut a = [0.0; 25];
+/// Flying: moving faster than 1 m/s or more than 2 m above the anchor.
+fn kf_flying(kf: &Kf) -> bool {
+    kf.velocity().norm() > 1.0 || -kf.position()[2] > 2.0
+}
+
+/// `range_of` per column as a table, for the fast path.
+const RANGES: [(f64, f64); 25] = {
+    let mut a = [(0.0, 0.0); 25];
     let mut i = 0;
     while i < 25 {
-        a[i] = range_of_const(i).0;
-        i += 1;
-    }
-    a
-};
-const HI: [f64; 25] = {
-    let mut a = [0.0; 25];
-    let mut i = 0;
-    while i < 25 {
-        a[i] = range_of_const(i).1;
+        a[i] = range_of(i);
         i += 1;
     }
     a
 };
 
-const fn range_of_const(i: usize) -> (f64, f64) {
+/// Valid ranges per column: a value outside is an input error.
+const fn range_of(i: usize) -> (f64, f64) {
     match i {
         0 => (-1e12, 1e12),           // t, s
         1 => (-90.0, 90.0),           // lat
@@ -1160,7 +1148,7 @@ fn row_is_plainly_valid(s: &Sample) -> bool {
     ];
     let mut ok = !v[0].is_nan();
     for i in 0..25 {
-        ok &= v[i].is_nan() | ((v[i] >= LO[i]) & (v[i] <= HI[i]));
+        ok &= v[i].is_nan() | ((v[i] >= RANGES[i].0) & (v[i] <= RANGES[i].1));
     }
     let nan = |i: usize| v[i].is_nan() as u8;
     let group = |a: usize, n: usize| {
