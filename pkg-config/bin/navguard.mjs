@@ -58,6 +58,19 @@ function toJson(value, indent) {
 
 const CHUNK = 4 << 20;
 
+/**
+ * One word for a report: `faults` (at least one interval), `clean`, or
+ * `no verdict` when the log has no GPS fix to judge, so a log the detector
+ * could not judge is never shown as a clean flight.
+ */
+function verdictOf(report) {
+  if (!report.gpsAvailable) return 'no verdict';
+  return report.faults.length > 0 ? 'faults' : 'clean';
+}
+
+/** Exit status under --fail-on-fault: 1 when any audited log has faults. */
+let faultsFound = false;
+
 /** True unless the file starts like a ULog or DataFlash log: navlog CSVs are
  * streamed, the binary formats are read whole. */
 function looksLikeCsv(fd) {
@@ -135,16 +148,18 @@ function audit(file, opt) {
     progressDone();
   }
   const { report } = res;
-  const out = { file, ...report };
+  const verdict = verdictOf(report);
+  if (verdict === 'faults') faultsFound = true;
+  const out = { file, verdict, ...report };
   if (opt.json) {
     writeOut(toJson(out) + '\n');
     return;
   }
   const L = [];
-  L.push(`${file}: ${report.format}, ${report.rows} rows, ${report.durationS.toFixed(1)} s`);
+  L.push(`${file}: ${report.format}, ${report.rows} rows, ${report.durationS.toFixed(1)} s: ${verdict}`);
   L.push(`  GPS: ${report.gpsAvailable ? `${report.gpsEpochs} epochs at ${report.gpsRateHz.toFixed(1)} Hz, fix in ${(100 * report.gpsFixFraction).toFixed(1)}% of reports` : 'unavailable'}; IMU ${report.imuRateHz.toFixed(1)} Hz`);
   if (report.missing.length) L.push(`  missing inputs: ${report.missing.join(', ')}`);
-  L.push(`  flagged GPS epochs: ${(100 * report.flaggedGpsEpochFraction).toFixed(2)}%`);
+  L.push(report.gpsAvailable ? `  flagged GPS epochs: ${(100 * report.flaggedGpsEpochFraction).toFixed(2)}%` : '  flagged GPS epochs: none to judge (no GPS fix in the log)');
   L.push(`  fault intervals: ${report.faults.length}`);
   for (const f of report.faults.slice(0, 20)) {
     L.push(`    ${f.start.toFixed(2).padStart(9)} - ${f.end.toFixed(2).padStart(9)} s  ${f.kind.padEnd(10)} peak F ${f.peakF.toFixed(2)}  driver ${f.driver} (${f.indicator})`);
@@ -190,23 +205,24 @@ async function auditDir(dir, opt) {
   });
   progressDone();
   results.sort((a, b) => a.file.localeCompare(b.file));
-  const rows = results.map((r) => r.error ? { file: r.file, error: r.error } : {
-    file: r.file, format: r.report.format, durationS: r.report.durationS, gpsAvailable: r.report.gpsAvailable,
+  const rows = results.map((r) => r.error ? { file: r.file, verdict: 'unreadable', error: r.error } : {
+    file: r.file, verdict: verdictOf(r.report), format: r.report.format, durationS: r.report.durationS, gpsAvailable: r.report.gpsAvailable,
     gpsRateHz: r.report.gpsRateHz, flaggedGpsEpochFraction: r.report.flaggedGpsEpochFraction,
     residualFaults: r.report.faults.filter((f) => f.kind === 'residual').length,
     outages: r.report.faults.filter((f) => f.kind === 'gps_outage').length,
     dataGaps: r.report.dataGaps.length, warnings: r.report.warnings, missing: r.report.missing, ms: r.ms,
   });
+  if (rows.some((r) => r.verdict === 'faults')) faultsFound = true;
   const summary = { dir, files: files.length, failed: rows.filter((r) => r.error).length, skipped, wallMs: performance.now() - t0, jobs, logs: rows };
   const json = toJson(summary, 2);
   if (summaryOut !== null) { summaryOut.write(json + '\n'); summaryOut.commit(); }
   if (opt.json) { writeOut(json + '\n'); return; }
   const L = [`${dir}: ${files.length} logs, ${summary.failed} unreadable, ${skipped.length} other files skipped, ${jobs} workers, ${(summary.wallMs / 1000).toFixed(2)} s`];
-  L.push('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps');
+  L.push('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps  verdict');
   for (const r of rows) {
     const name = r.file.length > 48 ? '...' + r.file.slice(-45) : r.file;
     if (r.error) { L.push(`  ${name.padEnd(48)}  unreadable: ${r.error}`); continue; }
-    L.push(`  ${name.padEnd(48)}  ${r.format.padEnd(9)} ${r.durationS.toFixed(1).padStart(6)} ${r.gpsAvailable ? r.gpsRateHz.toFixed(1).padStart(6) : '    no'}  ${(100 * r.flaggedGpsEpochFraction).toFixed(2).padStart(6)}%  ${String(r.residualFaults).padStart(5)} ${String(r.outages).padStart(7)} ${String(r.dataGaps).padStart(4)}`);
+    L.push(`  ${name.padEnd(48)}  ${r.format.padEnd(9)} ${r.durationS.toFixed(1).padStart(6)} ${r.gpsAvailable ? r.gpsRateHz.toFixed(1).padStart(6) : '    no'}  ${r.gpsAvailable ? (100 * r.flaggedGpsEpochFraction).toFixed(2).padStart(6) + '%' : '      -'}  ${String(r.residualFaults).padStart(5)} ${String(r.outages).padStart(7)} ${String(r.dataGaps).padStart(4)}  ${r.verdict}`);
   }
   writeOut(L.join('\n') + '\n');
 }
@@ -259,7 +275,7 @@ function compare(opt) {
 /** Each command's flags (name -> value kind, see lib/args.mjs) and help. */
 const COMMANDS = {
   audit: {
-    flags: { json: 'bool', 'per-sample': 'path', config: 'path', summary: 'path', jobs: 'count' },
+    flags: { json: 'bool', 'per-sample': 'path', config: 'path', summary: 'path', jobs: 'count', 'fail-on-fault': 'bool' },
     help: `navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]
 navguard audit DIR [--json] [--summary OUT.json] [--config CFG.json] [--jobs N]
 
@@ -271,7 +287,10 @@ content) or every log under a folder (recursively, following links).
   --config FILE      detector configuration (JSON object)
   --summary FILE     (DIR) the fleet summary as JSON
   --jobs N           (DIR) parallel workers (default: the number of cores)
-Exit status: 0 when the log was read, 2 when it could not be.`,
+  --fail-on-fault    exit 1 when a fault interval was found (for scripts)
+Each log gets a verdict: faults, clean, or "no verdict" (no GPS fix to judge).
+Exit status: 0 when the log was read (1 with --fail-on-fault and faults
+found), 2 when it could not be.`,
   },
   simulate: {
     flags: { seed: 'seed', out: 'path' },
@@ -378,6 +397,7 @@ async function main() {
   if (opt.help) { writeOut(COMMANDS[cmd].help + '\n'); return; }
   if (opt.version) { writeOut(VERSION + '\n'); return; }
   await run(cmd, pos, opt);
+  if (opt['fail-on-fault'] && faultsFound) process.exitCode = 1;
 }
 
 main().catch((e) => {

@@ -148,3 +148,28 @@ test('a closed pipe ends quietly', () => {
   assert.equal(r.stderr, '');
   assert.equal(r.status, 0);
 });
+
+test('a log with no GPS is "no verdict", never clean; --fail-on-fault exits 1 only when faults were found', () => {
+  const noGps = join(tmp, 'imu-only.csv');
+  const rows = ['t,ax,ay,az,gx,gy,gz,qw,qx,qy,qz,baro'];
+  for (let i = 0; i < 500; i++) rows.push(`${(i / 50).toFixed(2)},0,0,-9.81,0,0,0,1,0,0,0,10`);
+  writeFileSync(noGps, rows.join('\n') + '\n');
+  const r = run(['audit', noGps, '--json', '--fail-on-fault']);
+  assert.equal(r.status, 0, r.stderr);
+  const rep = JSON.parse(r.stdout);
+  assert.equal(rep.verdict, 'no verdict');
+  assert.equal(rep.gpsAvailable, false);
+  assert.match(run(['audit', noGps]).stdout, /flagged GPS epochs: none to judge/);
+  // The simulated step flight has a labelled 10 m step: faults.
+  const f = run(['audit', log, '--json', '--fail-on-fault']);
+  assert.equal(f.status, 1, f.stderr);
+  assert.equal(JSON.parse(f.stdout).verdict, 'faults');
+  assert.equal(run(['audit', log, '--json']).status, 0, 'without the flag the contract exit code is 0');
+  const fleet = join(tmp, 'fleet3');
+  mkdirSync(fleet);
+  copyFileSync(noGps, join(fleet, 'a.csv'));
+  const d = run(['audit', fleet, '--json', '--jobs', '1', '--fail-on-fault']);
+  assert.equal(d.status, 0, d.stderr);
+  assert.deepEqual(JSON.parse(d.stdout).logs.map((l) => l.verdict), ['no verdict']);
+  assert.match(run(['audit', fleet, '--jobs', '1']).stdout, /imu-only|a\.csv.* -\s+0\s+0\s+0\s+no verdict/);
+});
