@@ -57,7 +57,7 @@ FAST_MS = 8.0          # horizontal speed of a manoeuvre / fast flight
 TILT_DEG = 30.0
 UPSET_DEG = 90.0       # tilt of a flip or crash; fixed-wing banks reach 80 deg
 AFTER_OUTAGE_S = 7.0   # issue 14 item 11: false alarms 5-7 s after a degraded outage
-NEAR_GROUND_M = 3.0    # GPS altitude within this of the log's lowest: take-off, landing, on the ground
+NEAR_GROUND_M = 3.0    # baro (else GPS) altitude within this of the log's lowest: take-off, landing, ground
 START_S = 30.0         # issue 14 item 4: the first 10-30 s while sigma is learnt
 CLOCK_BAD = 0.02       # |boot/GPS clock ratio - 1| beyond which timing is suspect
 
@@ -340,8 +340,15 @@ def evidence(log, facts, iv):
     tt = log.s("att", "t")
     ev["tilt_max"] = _max(log.s("att", "tilt")[_sel(tt, a, b)])
     ev["height"] = height_check(log, a, b, w0)
-    alt = log.s("gps", "alt")[c & (st >= 3)]
-    ev["agl"] = float(np.min(alt) - facts["ground_alt"]) if len(alt) and facts["ground_alt"] is not None else None
+    # Height over ground: the baro above its low percentile when the log has one
+    # (a poor receiver's altitude wanders by 100s of m), else the GPS altitude.
+    tb = log.s("baro", "t")
+    if len(tb) > 10:
+        hb = log.s("baro", "alt")[_sel(tb, a, b)]
+        ev["agl"] = float(np.min(hb) - np.percentile(log.s("baro", "alt"), 2)) if len(hb) else None
+    else:
+        alt = log.s("gps", "alt")[c & (st >= 3)]
+        ev["agl"] = float(np.min(alt) - facts["ground_alt"]) if len(alt) and facts["ground_alt"] is not None else None
     ev["verdict"], ev["reason"] = verdict(ev, facts)
     ev["mechanism"] = mechanism(ev, facts)
     return ev

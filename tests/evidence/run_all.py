@@ -20,7 +20,8 @@ Checks:
             max(records inside, length x the log's GPS record rate), so an
             outage flag over a record gap counts the epochs it covers.
   found     every required event overlaps an interval starting at most
-            MATCH_S after the event start.
+            MATCH_S after the event start (an alarm already raised at the
+            start counts as delay 0).
   outage    every gps_outage interval that covers no known event lasts at
             least the shortest real loss on the shared logs.
 """
@@ -113,8 +114,9 @@ def assess(path, facts, report, evs, min_loss):
     share = flagged / n_active if n_active else 0.0
     found = []
     for k in known:
-        hits = [ev for ev in evs if _overlaps(ev["start"], ev["end"], k["start"] - MATCH_S, k["end"] + MATCH_S)]
-        delay = min((ev["start"] - k["start"] for ev in hits), default=None)
+        # Delay of the first alarm on the event; 0 when one is already raised at its start.
+        hits = [ev for ev in evs if _overlaps(ev["start"], ev["end"], k["start"], k["end"] + MATCH_S)]
+        delay = max(0.0, min(ev["start"] - k["start"] for ev in hits)) if hits else None
         found.append(dict(k, delay=delay, ok=delay is not None and delay <= MATCH_S))
     short = [ev for ev in evs if ev["kind"] == "gps_outage" and ev["dur"] < min_loss
              and not any(_overlaps(ev["start"], ev["end"], k["start"] - MATCH_S, k["end"] + MATCH_S) for k in known)]
