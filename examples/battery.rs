@@ -134,7 +134,7 @@ fn main() -> Result<(), String> {
         let fl = battery::imu_rate_flights(i);
         let rs = run_all(&fl, &a.cfg, a.threads)?;
         let pcts: Vec<f64> = rs.iter().map(|r| r.flagged_pct()).collect();
-        imu_rows.push((fl[0].describe(), pcts));
+        imu_rows.push((fl[0].describe().replace("IMU 50 Hz", "IMU 50-400 Hz"), pcts));
     }
     let secs = t0.elapsed().as_secs_f64();
     let rows: u64 = results.iter().map(|r| r.rows).sum();

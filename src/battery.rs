@@ -441,14 +441,14 @@ impl Flight {
             PathKind::Aggressive => (180.0, 360.0),
         };
         let duration = rng.range(dlo, dhi).max(ov.min_duration.unwrap_or(0.0));
-        let wind_speed = rng.range(0.0, 8.0);
+        let wind_speed = rng.range(0.0, 6.0);
         let wind_dir = rng.range(0.0, 2.0 * PI);
         let path = PathDraw {
             kind,
             duration,
             wind: [wind_speed * libm::cos(wind_dir), wind_speed * libm::sin(wind_dir)],
-            drag_linear: if kind.multirotor() { rng.range(0.15, 0.35) } else { 0.0 },
-            drag_quadratic: if kind.multirotor() { rng.range(0.008, 0.02) } else { 0.0 },
+            drag_linear: if kind.multirotor() { rng.range(0.1, 0.2) } else { 0.0 },
+            drag_quadratic: if kind.multirotor() { rng.range(0.008, 0.015) } else { 0.0 },
         };
 
         let gps = draw_gps(split, duration, &mut rng);
@@ -630,7 +630,7 @@ fn draw_imu(rng: &mut Rng) -> ImuDraw {
 }
 
 /// Faults of a flight: none (20%), one (60%) or two (20%) that do not
-/// overlap and are at least 30 s apart; a quarter start in the first 20 s.
+/// overlap and are at least 30 s apart; a quarter start 5–20 s into the log.
 fn draw_faults(f: &Flight, rng: &mut Rng) -> Vec<Fault> {
     let u = rng.uniform();
     let n = if u < 0.2 { 0 } else if u < 0.8 { 1 } else { 2 };
@@ -657,7 +657,9 @@ fn draw_faults(f: &Flight, rng: &mut Rng) -> Vec<Fault> {
         // spans a height change of at least 3 m, else it is unobservable).
         for _ in 0..20 {
             let latest = (f.path.duration - length - 5.0).max(0.0);
-            let start = if early { rng.range(0.0, 20.0f64.min(latest)) } else { rng.range(20.0f64.min(latest), latest) };
+            // Early starts leave 5 s of fault-free data: a fault present from
+            // the first fix has no reference to be judged against.
+            let start = if early { rng.range(5.0f64.min(latest), 20.0f64.min(latest)) } else { rng.range(20.0f64.min(latest), latest) };
             let end = start + length;
             let clear = out.faults.iter().all(|g| end + 30.0 <= g.start || start >= g.end + 30.0);
             let observable = kind != FaultKind::BaroStuck || path.height_range(start, end) >= 3.0;
@@ -936,7 +938,8 @@ impl Builder {
 
     fn plan(&mut self, kind: PathKind, duration: f64, rng: &mut Rng) {
         let takeoff = rng.range(3.0, 12.0);
-        let idle_after = rng.range(3.0, 10.0);
+        // Fixed-wing: 8 s roll-out after touch-down, then at least 2 s at rest.
+        let idle_after = if kind.multirotor() { rng.range(3.0, 10.0) } else { rng.range(10.0, 16.0) };
         let (cruise, up, down) = match kind {
             PathKind::Hover => (rng.range(8.0, 30.0), rng.range(1.0, 2.5), rng.range(0.7, 1.5)),
             PathKind::Survey => (rng.range(30.0, 80.0), rng.range(1.5, 3.0), rng.range(1.0, 2.0)),
@@ -984,6 +987,7 @@ impl Builder {
             self.t = self.t.max(self.climb.end()).max(self.heading.end());
             let h = self.height(self.t);
             let start = (duration - idle_after - Self::landing_time(kind, h, down) + 10.0).max(self.t);
+            // Slow down before the descent starts, so the two do not overlap.
             self.speed.to(start, 4.0, 0.75 * v_air);
             self.touchdown = self.climb_by(start, -h, down, 1.5);
             self.speed.to(self.touchdown, 8.0, 0.0);
@@ -1011,7 +1015,7 @@ impl Builder {
     fn survey_leg(&mut self, rng: &mut Rng, dir: f64) {
         let s = self.speed.last();
         let v = if s > 0.0 { s } else { rng.range(5.0, 12.0) };
-        let t1 = if s > 0.0 { self.t } else { self.speed.to(self.t, 3.0, v) };
+        let t1 = if s > 0.0 { self.t } else { self.speed.to(self.t, 5.0, v) };
         let leg = rng.range(60.0, 250.0) / v;
         let t2 = t1 + leg;
         if rng.uniform() < 0.5 {
@@ -1020,9 +1024,9 @@ impl Builder {
             self.t = self.heading.to(t2, dur, self.heading.last() + dir * PI);
         } else {
             // Stop, yaw round, go.
-            let t3 = self.speed.to(t2, 3.0, 0.0);
+            let t3 = self.speed.to(t2, 5.0, 0.0);
             let t4 = self.heading.to(t3, 4.0, self.heading.last() + dir * PI);
-            self.t = self.speed.to(t4, 3.0, v);
+            self.t = self.speed.to(t4, 5.0, v);
         }
     }
 
@@ -1032,8 +1036,8 @@ impl Builder {
         let t = self.t + rng.range(0.5, 4.0);
         match (rng.uniform() * 4.0) as u32 {
             0 => {
-                // Sprint to 10–18 m/s: a half-cosine of peak a takes πΔv/(2a).
-                let v = rng.range(10.0, 18.0);
+                // Sprint to 10–16 m/s: a half-cosine of peak a takes πΔv/(2a).
+                let v = rng.range(10.0, 16.0);
                 self.t = self.speed.to(t, (PI * (v - s).abs() / (2.0 * a)).max(0.5), v);
             }
             1 => {
@@ -1047,8 +1051,10 @@ impl Builder {
                 self.t = self.heading.to(t, dur, self.heading.last() + dh);
             }
             _ => {
+                // Climbs and drops at 2–4 m/s with 2 s transitions (peak
+                // vertical acceleration ≤ 3.2 m/s², so thrust never nears zero).
                 let target = (h + rng.range(-20.0, 20.0)).clamp(15.0, 80.0);
-                self.t = self.climb_by(t, target - h, rng.range(2.0, 5.0), 1.0);
+                self.t = self.climb_by(t, target - h, rng.range(2.0, 4.0), 2.0);
             }
         }
     }
@@ -1610,6 +1616,16 @@ fn flight_keys(f: &Flight) -> Vec<(&'static str, String)> {
     ]
 }
 
+/// Sort keys by their leading number when they have one ("2 Hz" < "10 Hz"), else by text.
+fn sort_keys(keys: &mut Vec<String>) {
+    let lead = |k: &str| k.split(|c: char| !(c.is_ascii_digit() || c == '.')).next().and_then(|x| x.parse::<f64>().ok());
+    keys.sort_by(|a, b| match (lead(a), lead(b)) {
+        (Some(x), Some(y)) => x.total_cmp(&y).then_with(|| a.cmp(b)),
+        _ => a.cmp(b),
+    });
+    keys.dedup();
+}
+
 /// Every condition table over the results.
 pub fn tables(results: &[FlightResult]) -> Vec<Table> {
     let mut out: Vec<Table> = vec![];
@@ -1617,8 +1633,7 @@ pub fn tables(results: &[FlightResult]) -> Vec<Table> {
     let Some(first) = results.first() else { return out };
     for (ti, (name, _)) in flight_keys(&first.flight).into_iter().enumerate() {
         let mut keys: Vec<String> = all.iter().filter_map(|r| flight_keys(&r.flight).into_iter().nth(ti).map(|k| k.1)).collect();
-        keys.sort();
-        keys.dedup();
+        sort_keys(&mut keys);
         let rows = keys
             .iter()
             .map(|k| {
@@ -1633,8 +1648,7 @@ pub fn tables(results: &[FlightResult]) -> Vec<Table> {
         [("Fault kind", kind_key), ("Fault duration", |f| duration_key(f).into()), ("Fault start", |f| start_key(f).into())];
     for (name, key) in ev_dims {
         let mut keys: Vec<String> = all.iter().flat_map(|r| r.flight.faults.iter().map(key)).collect();
-        keys.sort();
-        keys.dedup();
+        sort_keys(&mut keys);
         let mut rows: Vec<GroupRow> = keys
             .iter()
             .map(|k| {
