@@ -1184,7 +1184,9 @@ fn gps_rows(f: &Flight, path: &Path) -> Vec<Sample> {
     let mut gm = [GaussMarkov::new(gm_h, d.tau, &mut rng), GaussMarkov::new(gm_h, d.tau, &mut rng), GaussMarkov::new(gm_v, d.tau, &mut rng)];
     let dt = 1.0 / d.rate;
     let mut sats = d.sats;
-    let mut frozen: Vec<Option<(Vector3<f64>, Vector3<f64>, f64, f64)>> = vec![None; f.faults.len()];
+    // Per fault: the onset's (position, velocity, eph, sats).
+    type Held = Option<(Vector3<f64>, Vector3<f64>, f64, f64)>;
+    let mut frozen: Vec<Held> = vec![None; f.faults.len()];
     let mut walk = Vector3::zeros();
     let n = libm::floor((f.path.duration - d.phase) * d.rate) as usize;
     let mut out = Vec::with_capacity(n);
@@ -1228,7 +1230,7 @@ fn gps_rows(f: &Flight, path: &Path) -> Vec<Sample> {
                     vm += dir * (ft.magnitude * smooth(x, 0.0, on));
                 }
                 FaultKind::Frozen => {
-                    let fz = frozen.get_mut(i).and_then(|z| Some(*z.get_or_insert((pm, vm, eph, nsat))));
+                    let fz = frozen.get_mut(i).map(|z| *z.get_or_insert((pm, vm, eph, nsat)));
                     if let Some((p0, v0, e0, n0)) = fz {
                         pm = p0;
                         vm = v0;
@@ -1453,7 +1455,7 @@ fn event_result(f: &Flight, ft: &Fault, epochs: &[Epoch]) -> EventResult {
     let flagged = inside.iter().filter(|e| e.status != 0).count() as u64;
     let delay = inside.iter().find(|e| e.status != 0).map_or(f64::NAN, |e| (e.t - ft.start_log) / f.clock.rate);
     let win_end = ft.end_log + AFTER_WINDOW * f.clock.rate;
-    let mut prev = epochs.iter().filter(|e| e.t < ft.end_log).last().map_or(0, |e| e.status);
+    let mut prev = epochs.iter().rev().find(|e| e.t < ft.end_log).map_or(0, |e| e.status);
     let mut after = 0u64;
     let mut new_interval = false;
     for e in epochs.iter().filter(|e| e.t >= ft.end_log && e.t < win_end) {
@@ -1703,7 +1705,7 @@ impl CheckSpec {
         let path = if self.moving { Some(pick(&mut rng, &[PathKind::Survey, PathKind::Aggressive, PathKind::FixedWing])) } else { None };
         let ov = Overrides { path, min_duration: Some(start + self.length + 60.0) };
         let mut f = Flight::conditions(Split::Eval, index, ov);
-        let axis = self.axis.unwrap_or(if i % 2 == 0 { Axis::Horizontal } else { Axis::Vertical });
+        let axis = self.axis.unwrap_or(if i.is_multiple_of(2) { Axis::Horizontal } else { Axis::Vertical });
         let direction = match axis {
             Axis::Horizontal => rng.range(0.0, 2.0 * PI),
             Axis::Vertical => {
