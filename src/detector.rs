@@ -693,7 +693,7 @@ impl Detector {
         let Some(kf) = self.kf.as_mut() else { return };
         if !kf.baro_initialised() {
             if kf.update_baro(baro).is_ok() {
-                self.prev_baro_h = Some(-kf.position()[2] + kf.x[9]);
+                self.prev_baro_h = Some(kf.baro_height());
             }
             return;
         }
@@ -703,7 +703,7 @@ impl Detector {
         if self.baro_inn.is_none_or(|b| g((inn.nu[0], inn.s[0])) > g(b)) {
             self.baro_inn = Some((inn.nu[0], inn.s[0]));
         }
-        let h_prior = -kf.x[2] + kf.x[9];
+        let h_prior = kf.baro_height();
         let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
         let prev = self.ind.previous(6);
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
@@ -721,7 +721,7 @@ impl Detector {
                 self.ind.reset_axis(6);
                 self.ind.clear_baro();
                 if kf.update_baro(baro).is_ok() {
-                    self.prev_baro_h = Some(-kf.x[2] + kf.x[9]);
+                    self.prev_baro_h = Some(kf.baro_height());
                 }
                 return;
             }
@@ -731,7 +731,7 @@ impl Detector {
         if !self.group_bad[2] {
             match kf.update_baro(baro) {
                 Ok(()) => {
-                    let p_post = kf.P[(2, 2)] + kf.P[(9, 9)] - 2.0 * kf.P[(2, 9)];
+                    let p_post = kf.baro_height_var();
                     let post = kf.baro_innovation(baro).nu[0];
                     self.ind.accept(6, prev, p_post, post);
                     if self.last.status == 0 {
@@ -745,7 +745,7 @@ impl Detector {
             }
         }
         if let Some(kf) = self.kf.as_ref() {
-            self.prev_baro_h = Some(-kf.x[2] + kf.x[9]);
+            self.prev_baro_h = Some(kf.baro_height());
         }
     }
 
@@ -787,7 +787,7 @@ impl Detector {
         let mut prev_r = [0.0; 6];
         for a in 0..3 {
             prev_r[a] = self.ind.previous(a);
-            self.ind.observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
+            self.ind.observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.position_var(a));
         }
         let vel_prior = kf.velocity();
         let mut vin_opt = None;
@@ -797,7 +797,7 @@ impl Detector {
             self.resid[3..6].copy_from_slice(&vin.nu);
             for a in 0..3 {
                 prev_r[3 + a] = self.ind.previous(3 + a);
-                self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.P[(3 + a, 3 + a)]);
+                self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.velocity_var(a));
             }
         }
         // Position–velocity consistency: the GPS's own position change
@@ -839,7 +839,7 @@ impl Detector {
         } else {
             let mut nu = [f64::NAN; 6];
             nu[..3].copy_from_slice(&pin.nu);
-            let mut inn = EpochInnovations { nu, s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(), m: 3, baro: baro_inn };
+            let mut inn = EpochInnovations { nu, s: kf.pos_vel_covariance(), m: 3, baro: baro_inn };
             for a in 0..3 {
                 inn.s[(a, a)] = pin.s[a];
             }
@@ -998,8 +998,8 @@ impl Detector {
                 match kf.update_position(&y) {
                     Ok(()) => {
                         for a in 0..3 {
-                            let post = y[a] - kf.x[a];
-                            self.ind.accept(a, prev_r[a], kf.P[(a, a)], post);
+                            let post = y[a] - kf.position()[a];
+                            self.ind.accept(a, prev_r[a], kf.position_var(a), post);
                         }
                     }
                     Err(e) => err = Some(e),
@@ -1009,8 +1009,8 @@ impl Detector {
                 match kf.update_velocity(v) {
                     Ok(()) => {
                         for a in 0..3 {
-                            let post = v[a] - kf.x[3 + a];
-                            self.ind.accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)], post);
+                            let post = v[a] - kf.velocity()[a];
+                            self.ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), post);
                         }
                     }
                     Err(e) => err = Some(e),
