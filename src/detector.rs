@@ -1577,4 +1577,136 @@ mod tests {
         (s.qw, s.qx, s.qy, s.qz) = (0.3, 0.0, 0.0, 0.0);
         assert_eq!(validate_sample(&s, 0).unwrap_err().field, "qw");
     }
+
+    /// Clean indicators: every group at R 1, increments 1, no pv.
+    fn clean() -> Indicators {
+        Indicators { r: 1.0, r_group: [1.0; GROUPS], inc_group: [1.0; GROUPS], pv: f64::NAN, ..Indicators::default() }
+    }
+
+    fn evidence(ind: &Indicators) -> Evidence<'_> {
+        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None }
+    }
+
+    #[test]
+    fn the_clock_learns_a_10_hz_period_and_silence_becomes_an_outage_after_1_5_periods() {
+        let mut c = Clock::new();
+        assert_eq!(c.row(0.0, 1.0), (0.0, false));
+        for k in 0..400 {
+            c.fix(0.1 * k as f64);
+        }
+        // From the 0.2 s prior the period converges to 0.1 s, jitter to 0.
+        assert!((c.gps_dt - 0.1).abs() < 1e-6 && c.gps_jitter < 1e-6, "{} {}", c.gps_dt, c.gps_jitter);
+        let lf = 39.9;
+        // 1.5 periods + 20 ms: 0.17 s after the last fix, in flight only.
+        assert!(!c.is_outage(lf + 0.16, false, false, true, None));
+        assert!(c.is_outage(lf + 0.18, false, false, true, None));
+        assert!(!c.is_outage(lf + 0.18, false, false, false, None));
+        assert!(!c.is_outage(lf + 0.18, false, false, true, Some(0.5)));
+        // The receiver's own "no fix" counts after half a period, on the ground too.
+        assert!(!c.is_outage(lf + 0.04, true, false, false, None));
+        assert!(c.is_outage(lf + 0.06, true, false, false, None));
+        // Before any fix nothing is an outage.
+        assert!(!Clock::new().is_outage(100.0, true, true, true, None));
+    }
+
+    #[test]
+    fn a_data_gap_moves_the_last_fix_to_its_end() {
+        let mut c = Clock::new();
+        c.row(10.0, 1.0);
+        c.fix(10.0);
+        assert_eq!(c.row(10.5, 1.0), (0.5, false));
+        assert_eq!(c.last_fix, Some(10.0));
+        assert_eq!(c.row(13.0, 1.0), (2.5, true));
+        assert_eq!(c.last_fix, Some(13.0));
+    }
+
+    #[test]
+    fn gating_withholds_departed_groups_and_the_receiver_takes_its_other_half() {
+        // Velocity departed with the position off its clean level: both go.
+        let mut ind = clean();
+        (ind.r_group[0], ind.r_group[1]) = (1.6, 3.0);
+        let mut w = Withheld::default();
+        w.withhold(&evidence(&ind));
+        assert_eq!(w.groups, [true, true, false]);
+        // Velocity alone with a clean position: the position keeps aiding.
+        ind.r_group[0] = 1.4;
+        let mut w = Withheld::default();
+        w.withhold(&evidence(&ind));
+        assert_eq!(w.groups, [false, true, false]);
+        // Position departed and the receiver incoherent: velocity goes too.
+        let mut ind = clean();
+        ind.r_group[0] = 3.0;
+        let mut w = Withheld::default();
+        w.withhold(&Evidence { incoherence: 4.5, ..evidence(&ind) });
+        assert_eq!(w.groups, [true, true, false]);
+        // Fault memory: a group stays withheld after its R falls back.
+        w.withhold(&evidence(&clean()));
+        assert_eq!(w.groups, [true, true, false]);
+        // The IMU consistency folded into the velocity R does not withhold
+        // the GPS velocity: its own R decides.
+        let mut ind = clean();
+        ind.r_group[1] = 6.0;
+        let mut w = Withheld::default();
+        w.withhold(&Evidence { r_vel: 1.0, ..evidence(&ind) });
+        assert_eq!(w.groups, [false, false, false]);
+        // Another method's failed group is withheld on its word.
+        let dec = Decision { score: 2.0, failed: [false, false, true] };
+        w.withhold(&Evidence { dec: Some(&dec), ..evidence(&clean()) });
+        assert_eq!(w.groups, [false, false, true]);
+    }
+
+    #[test]
+    fn a_withheld_baro_is_released_after_five_consecutive_calm_samples() {
+        let mut w = Withheld::default();
+        assert!(!w.baro_released(0.1), "a baro that is fed is not released");
+        w.groups[2] = true;
+        for cons in [1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 1.0, 1.0] {
+            assert!(!w.baro_released(cons));
+        }
+        assert!(w.baro_released(1.0));
+        assert_eq!((w.groups[2], w.baro_calm), (false, 0));
+    }
+
+    #[test]
+    fn an_episode_re_anchors_after_max_coast_or_after_five_calm_epochs() {
+        let ind = clean();
+        // Past maxCoast (20 s): re-anchor, still a fault.
+        let mut e = Episode::default();
+        let mut bad = clean();
+        bad.r_group[0] = 10.0;
+        assert_eq!(e.step(100.0, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(120.5, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: true });
+        // Agreement for 5 epochs (and over 0.5 s): recovered, verdict normal.
+        let mut e = Episode::default();
+        for k in 0..4 {
+            let st = e.step(10.0 + 0.2 * k as f64, true, &evidence(&ind), 20.0, false);
+            assert_eq!(st, EpisodeStep { fault: true, reset: false }, "epoch {k}");
+        }
+        assert_eq!(e.step(10.8, true, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: true });
+        // A position-only episode keeps a large offset as the fault itself.
+        let mut e = Episode::default();
+        let mut step = clean();
+        step.r_group[0] = 4.5;
+        for k in 0..10 {
+            assert!(!e.step(10.0 + 0.2 * k as f64, true, &evidence(&step), 20.0, false).reset);
+        }
+        // An IMU episode, or the trainer's oracle, never recovers that way.
+        let mut e = Episode { imu: true, ..Episode::default() };
+        let mut o = Episode::default();
+        for k in 0..10 {
+            let t = 10.0 + 0.2 * k as f64;
+            assert!(!e.step(t, true, &evidence(&ind), 20.0, false).reset);
+            assert!(!o.step(t, true, &evidence(&ind), 20.0, true).reset);
+        }
+        // A normal verdict releases every group; the receiver counts as lost
+        // until five normal epochs.
+        let mut e = Episode { receiver_lost: true, coast_start: Some(3.0), ..Episode::default() };
+        e.withheld.groups = [true, true, true];
+        for k in 0..5 {
+            assert!(e.receiver_lost, "epoch {k}");
+            assert_eq!(e.step(20.0, false, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: false });
+            assert_eq!((e.withheld.groups, e.coast_start), ([false; GROUPS], None));
+        }
+        assert!(!e.receiver_lost);
+    }
 }
