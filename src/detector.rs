@@ -35,6 +35,15 @@
 //! false alarms and widened the fault region with each cycle. No fix while flying, after a fix
 //! has been seen, is a GPS outage (a fault); rows between fixes carry the last
 //! epoch's verdict. Every allocation happens in `new`.
+//!
+//! Layout: a GPS epoch runs as named stages (residuals, tests, decision,
+//! episode, gating, filter update, learning; see `Detector::gps_epoch`),
+//! each a method on the small state it reads and writes: `Clock` (row and
+//! fix timing, the outage rule), `LastEstimate` (where the filter stood,
+//! the residuals stage), `Consistency` (the filter-independent tests'
+//! integrals, the tests stage), `Methods` (the decision), `Episode` and its
+//! `Withheld` groups (episode start and end, gating), and `Learning` (the
+//! ANFIS and its databases).
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
