@@ -35,13 +35,22 @@
 //! false alarms and widened the fault region with each cycle. No fix while flying, after a fix
 //! has been seen, is a GPS outage (a fault); rows between fixes carry the last
 //! epoch's verdict. Every allocation happens in `new`.
+//!
+//! Layout: a GPS epoch runs as named stages (residuals, tests, decision,
+//! episode, gating, filter update, learning; see `Detector::gps_epoch`),
+//! each a method on the small state it reads and writes: `Clock` (row and
+//! fix timing, the outage rule), `LastEstimate` (where the filter stood,
+//! the residuals stage), `Consistency` (the filter-independent tests'
+//! integrals, the tests stage), `Methods` (the decision), `Episode` and its
+//! `Withheld` groups (episode start and end, gating), and `Learning` (the
+//! ANFIS and its databases).
 
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
-use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Kf};
+use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
@@ -311,65 +320,648 @@ const CONFIDENT_FAULT: f64 = 0.8;
 const CONFIDENT_NORMAL: f64 = 0.2;
 const TRAIN_LR: f64 = 0.05;
 
-/// The streaming detector.
+/// The streaming detector: the filter and the indicator engine, plus one
+/// small state per stage of the GPS epoch (see `Detector::gps_epoch`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Detector {
     cfg: Config,
-    anfis: Anfis,
-    d1: Ring,
-    d2: Ring,
-    new_faults: usize,
+    /// The navigation filter; None until the first fix, and after a data
+    /// gap or a filter error until the next one.
     kf: Option<Kf>,
     anchor: Option<Anchor>,
-    ind: IndicatorEngine,
+    /// The latest IMU sample (time s, input), held for the next prediction.
     imu: Option<(f64, ImuInput)>,
-    last_t: Option<f64>,
-    last_fix_t: Option<f64>,
-    fix_seen: bool,
-    gps_dt: f64,
-    /// Mean absolute deviation of the GPS interval, s (receiver jitter).
-    gps_jitter: f64,
+    ind: IndicatorEngine,
+    clock: Clock,
+    last_est: LastEstimate,
+    consistency: Consistency,
+    episode: Episode,
+    methods: Methods,
+    learning: Learning,
     /// This row's residuals (pos N/E/D m, vel N/E/D m/s, baro m); NaN where
     /// not computed on this row.
     resid: [f64; 7],
-    prev_pos: Vector3<f64>,
-    prev_vel: Vector3<f64>,
-    prev_baro_h: Option<f64>,
-    /// Previous GPS fix (t, position NED, velocity) for the consistency test.
-    last_gps: Option<(f64, Vector3<f64>, Vector3<f64>)>,
-    coast_start: Option<f64>,
-    calm_epochs: u32,
-    /// The current fault episode withheld the GPS velocity or was an
-    /// outage: the filter has coasted on the IMU alone.
-    receiver_lost: bool,
-    /// Consecutive normal GPS verdicts.
-    normal_run: u32,
-    group_bad: [bool; GROUPS],
-    /// The filter's vertical velocity integrated (altitude up, m), for the
-    /// baro consistency test.
-    alt_int: f64,
-    /// The filter's IMU-predicted velocity changes summed (m/s), for the IMU
-    /// consistency test; `imu_gap`: a prediction since the last GPS epoch ran
-    /// without IMU.
-    dv_imu: Vector3<f64>,
-    imu_gap: bool,
-    /// Time flown with the filter running, s: the IMU consistency test joins
-    /// the decision once its σ has been learnt in flight.
-    flight_time: f64,
-    /// Inside a fault episode; `imu_episode`: the IMU consistency drove its
-    /// first verdict. Any other episode restarts the IMU window at every
-    /// epoch, so the GPS velocities of an outage or a GPS fault never sit in
-    /// the window that judges the clean epochs after it.
-    in_episode: bool,
-    imu_episode: bool,
-    /// Consecutive IMU-episode epochs whose last second was calm.
-    imu_calm: u32,
-    /// Consecutive baro samples consistent with the filter while withheld.
-    baro_calm: u32,
     last: Output,
     last_ind: Indicators,
     stats: Stats,
     oracle: bool,
+}
+
+/// A GPS fix in the local frame.
+#[derive(Clone, Copy, Debug)]
+struct Fix {
+    /// Time, s.
+    t: f64,
+    /// Position NED, m.
+    y: Vector3<f64>,
+    /// Velocity NED (m/s), when the receiver gives one.
+    vel: Option<Vector3<f64>>,
+}
+
+impl Fix {
+    fn new(s: &Sample, anchor: &Anchor) -> Self {
+        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)) }
+    }
+}
+
+/// Row and fix timing: time order, data gaps, and the receiver's learnt
+/// period, which says when silence becomes an outage.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Clock {
+    /// Time of the last row, s.
+    last_t: Option<f64>,
+    /// Time of the last fix, s; moved to the end of a data gap, so the gap
+    /// itself does not count as the receiver's silence.
+    last_fix: Option<f64>,
+    /// Learnt GPS period, s.
+    gps_dt: f64,
+    /// Mean absolute deviation of the GPS interval, s (receiver jitter).
+    gps_jitter: f64,
+}
+
+impl Clock {
+    fn new() -> Self {
+        Clock { last_t: None, last_fix: None, gps_dt: 0.2, gps_jitter: 0.0 }
+    }
+
+    /// A row at `t` s: the time since the previous row (0 for the first),
+    /// s, and whether that is a data gap (longer than `data_gap` s).
+    fn row(&mut self, t: f64, data_gap: f64) -> (f64, bool) {
+        let dt = self.last_t.map_or(0.0, |lt| t - lt);
+        let gap = self.last_t.is_some() && dt > data_gap;
+        if gap && self.last_fix.is_some() {
+            self.last_fix = Some(t);
+        }
+        self.last_t = Some(t);
+        (dt, gap)
+    }
+
+    /// A fix at `t` s: learn the receiver's period and jitter from the
+    /// interval since the previous fix (longer ones are losses, not periods).
+    fn fix(&mut self, t: f64) {
+        if let Some(lf) = self.last_fix {
+            let d = t - lf;
+            if d > 0.0 && d < 5.0 {
+                self.gps_jitter += 0.05 * ((d - self.gps_dt).abs() - self.gps_jitter);
+                self.gps_dt += 0.05 * (d - self.gps_dt);
+            }
+        }
+        self.last_fix = Some(t);
+    }
+
+    /// Outage at a row without a fix at `t` s: after a fix has been seen,
+    /// the receiver says it has none (`reports_no_fix`), or (`flying`) no
+    /// fix arrived within `timeout` s (by default 1.5 periods, or more for a
+    /// jittery receiver: a late fix is not an outage). It lasts
+    /// (`in_outage`) until the next fix. A receiver that reports losing its
+    /// fix is an outage on the ground too; mere silence counts only in
+    /// flight (logs often stop sending GPS after landing).
+    fn is_outage(&self, t: f64, reports_no_fix: bool, in_outage: bool, flying: bool, timeout: Option<f64>) -> bool {
+        let Some(lf) = self.last_fix else {
+            return false;
+        };
+        if in_outage {
+            return true;
+        }
+        if reports_no_fix && t - lf > 0.5 * self.gps_dt {
+            return true;
+        }
+        let auto = (1.5 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
+        flying && t - lf > timeout.unwrap_or(auto)
+    }
+}
+
+/// Where the filter's estimate stood when each sensor was last judged: the
+/// indicators' predicted change `m` is measured from here.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct LastEstimate {
+    /// Position NED (m) and velocity NED (m/s) after the last GPS epoch.
+    pos: Vector3<f64>,
+    vel: Vector3<f64>,
+    /// Predicted baro reading (m) after the last baro sample; None after a
+    /// (re)initialisation.
+    baro_h: Option<f64>,
+}
+
+/// The residuals stage's output for one fix.
+#[derive(Clone, Copy, Debug)]
+struct Residuals {
+    /// Position innovation (ν m, S m²).
+    pin: Innovation<3>,
+    /// Velocity innovation (ν m/s, S (m/s)²), when the fix has a velocity.
+    vin: Option<Innovation<3>>,
+    /// Each GPS axis' previous residual, for `IndicatorEngine::accept` once
+    /// the axis is fed to the filter.
+    prev_r: [f64; 6],
+}
+
+impl Residuals {
+    /// Into the row's residuals (position, then velocity; baro untouched).
+    fn write(&self, resid: &mut [f64; 7]) {
+        resid[..3].copy_from_slice(&self.pin.nu);
+        if let Some(vin) = &self.vin {
+            resid[3..6].copy_from_slice(&vin.nu);
+        }
+    }
+}
+
+impl LastEstimate {
+    /// The residuals stage: the fix against the filter's prediction, each
+    /// axis observed by the indicator engine with the change the filter
+    /// predicted since the last epoch.
+    fn residuals(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix) -> Residuals {
+        let pin = kf.position_innovation(&fix.y);
+        let pos_prior = kf.position();
+        let mut prev_r = [0.0; 6];
+        for a in 0..3 {
+            prev_r[a] = ind.previous(a);
+            ind.observe(a, pin.nu[a], pos_prior[a] - self.pos[a], kf.position_var(a));
+        }
+        let vel_prior = kf.velocity();
+        let vin = fix.vel.map(|v| {
+            let vin = kf.velocity_innovation(&v);
+            for a in 0..3 {
+                prev_r[3 + a] = ind.previous(3 + a);
+                ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.vel[a], kf.velocity_var(a));
+            }
+            vin
+        });
+        Residuals { pin, vin, prev_r }
+    }
+
+    /// The filter's estimate after a GPS epoch's update (or re-anchoring).
+    fn set_epoch(&mut self, kf: &Kf) {
+        self.pos = kf.position();
+        self.vel = kf.velocity();
+    }
+}
+
+/// Running integrals that the filter-independent consistency tests (see
+/// `indicators`) compare the sensors against. They advance with every
+/// prediction and are read at baro samples and GPS epochs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Consistency {
+    /// The filter's vertical velocity integrated (altitude up, m): the baro
+    /// test's reference.
+    alt_int: f64,
+    /// The filter's IMU-predicted velocity changes summed (m/s): the IMU
+    /// test's reference.
+    dv_imu: Vector3<f64>,
+    /// A prediction since the last GPS epoch ran without IMU, so `dv_imu`
+    /// does not measure the IMU alone over that interval.
+    imu_gap: bool,
+    /// Time flown with the filter running, s: the IMU test joins the
+    /// decision once its σ has been learnt in flight.
+    flight_time: f64,
+    /// Previous GPS fix (t s, position NED m, velocity m/s) for the
+    /// position–velocity test.
+    last_gps: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+}
+
+impl Consistency {
+    fn new() -> Self {
+        Consistency { alt_int: 0.0, dv_imu: Vector3::zeros(), imu_gap: true, flight_time: 0.0, last_gps: None }
+    }
+
+    /// One prediction of `dt` s moved the filter's velocity from `v0` to
+    /// `v1` (m/s), `on_imu` or on the constant-velocity model.
+    fn advance(&mut self, dt: f64, v0: Vector3<f64>, v1: Vector3<f64>, flying: bool, on_imu: bool) {
+        if flying {
+            self.flight_time += dt;
+        }
+        self.alt_int -= 0.5 * (v0[2] + v1[2]) * dt;
+        if on_imu {
+            self.dv_imu += v1 - v0;
+        } else {
+            self.imu_gap = true;
+        }
+    }
+
+    /// The tests stage: feed the fix to the position–velocity and IMU
+    /// consistency tests, decide whether the IMU test joins R, and close the
+    /// epoch's indicators. `vel_withheld`: the GPS velocity is withheld.
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool) -> Indicators {
+        let (t, y) = (fix.t, fix.y);
+        // Position–velocity consistency: the GPS's own position change
+        // against the trapezoid of its velocities (filter-independent).
+        // Not while the velocity is withheld: a biased velocity (degraded
+        // fix, frozen or zeroed output) would fill the window with its own
+        // bias and hold the test up after it clears.
+        match (&fix.vel, self.last_gps) {
+            (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
+                let dtg = t - pt;
+                let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
+                ind.observe_pv(u, !vel_withheld);
+            }
+            _ => ind.clear_pv(),
+        }
+        self.last_gps = fix.vel.map(|v| (t, y, v));
+        // IMU consistency: GPS horizontal velocity against the filter's
+        // IMU-predicted velocity changes, only while every prediction since
+        // the last epoch ran on the IMU.
+        if self.imu_gap {
+            ind.clear_imu();
+            self.imu_gap = false;
+        }
+        match &fix.vel {
+            Some(v) => ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
+            None => ind.clear_imu(),
+        }
+        ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
+        ind.close_epoch()
+    }
+}
+
+/// The decision stage's verdict on one GPS epoch, before the episode logic.
+#[derive(Clone, Copy, Debug)]
+struct Verdict {
+    /// ANFIS input `[ln(1+R), C]`.
+    x: [f64; 2],
+    /// F-indicator, or the other method's score.
+    f: f64,
+    fault: bool,
+    /// The other method's decision; None for the ANFIS.
+    dec: Option<Decision>,
+    /// Δr per group (position, velocity) for the `mahalanobis` windows.
+    dr: [[f64; 3]; 2],
+}
+
+/// State of the detection methods other than the ANFIS (`config.method`).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct Methods {
+    /// Previous GPS epoch's innovations (pos, vel) for Δr; None after a
+    /// (re)initialisation.
+    prev_nu: Option<[f64; 6]>,
+    /// Reference windows of the `mahalanobis` method (position, velocity).
+    maha: [MahaWindow; 2],
+    /// Largest-γ baro innovation (ν m, S m²) since the last GPS epoch.
+    baro_inn: Option<(f64, f64)>,
+    /// Threshold pool of the `rms`, `knee` and `adaptive` methods.
+    pool: Option<PoolState>,
+}
+
+impl Methods {
+    /// A baro sample's innovation (ν m, S m²): the epoch keeps its largest
+    /// normalised one.
+    fn note_baro(&mut self, nu: f64, s: f64) {
+        let g = |(nu, s): (f64, f64)| nu.abs() / s.max(1e-12).sqrt();
+        if self.baro_inn.is_none_or(|b| g((nu, s)) > g(b)) {
+            self.baro_inn = Some((nu, s));
+        }
+    }
+
+    /// The decision stage: the configured method's score for the epoch and
+    /// whether it is a fault (`label` overrides it: the trainer's oracle).
+    fn decide(&mut self, cfg: &Config, anfis: &Anfis, kf: &Kf, res: &Residuals, ind: &Indicators, label: Option<f64>) -> Verdict {
+        let x = inputs(ind.r, ind.c);
+        let (dec, dr) = self.other_method(cfg.method, kf, res);
+        let f = dec.map_or_else(|| anfis.eval(&x), |d| d.score);
+        let th = if dec.is_some() { 1.0 } else { cfg.threshold };
+        let fault = match label {
+            Some(l) => l >= 0.5,
+            None => f >= th,
+        };
+        Verdict { x, f, fault, dec, dr }
+    }
+
+    /// Another method's decision on the same innovations (see `methods`)
+    /// and Δr per group; nothing to build for the default ANFIS.
+    fn other_method(&mut self, method: Method, kf: &Kf, res: &Residuals) -> (Option<Decision>, [[f64; 3]; 2]) {
+        let baro = self.baro_inn.take();
+        if method == Method::Anfis {
+            return (None, [[f64::NAN; 3]; 2]);
+        }
+        let mut nu = [f64::NAN; 6];
+        nu[..3].copy_from_slice(&res.pin.nu);
+        let mut inn = EpochInnovations { nu, s: kf.pos_vel_covariance(), m: 3, baro };
+        for a in 0..3 {
+            inn.s[(a, a)] = res.pin.s[a];
+        }
+        if let Some(vin) = &res.vin {
+            inn.m = 6;
+            for a in 0..3 {
+                inn.nu[3 + a] = vin.nu[a];
+                inn.s[(3 + a, 3 + a)] = vin.s[a];
+            }
+        }
+        let dr = core::array::from_fn(|g| {
+            core::array::from_fn(|a| self.prev_nu.map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a]))
+        });
+        self.prev_nu = Some(inn.nu);
+        let dec = match method {
+            Method::Anfis => None,
+            Method::Chi2 => Some(methods::chi2(&inn)),
+            Method::Nis => Some(methods::nis(&inn)),
+            Method::Gate => Some(methods::gate(&inn)),
+            Method::Mahalanobis => Some(methods::mahalanobis(&self.maha, dr, inn.m == 6)),
+            Method::Rms | Method::Knee | Method::Adaptive => {
+                let v = kf.velocity();
+                let speed = v[0].hypot(v[1]);
+                self.pool.as_mut().map(|p| p.decide(&inn, speed))
+            }
+        };
+        (dec, dr)
+    }
+
+    /// A normal epoch: the `mahalanobis` reference windows learn its Δr.
+    fn learn_normal(&mut self, method: Method, dr: [[f64; 3]; 2]) {
+        if method == Method::Mahalanobis {
+            for g in 0..2 {
+                self.maha[g].push(dr[g]);
+            }
+        }
+    }
+}
+
+/// What the gating stage judges departures on at one GPS epoch.
+#[derive(Clone, Copy, Debug)]
+struct Evidence<'a> {
+    ind: &'a Indicators,
+    /// The GPS velocity group's own R (`IndicatorEngine::r_vel_unfolded`).
+    r_vel: f64,
+    /// Receiver incoherence (`IndicatorEngine::incoherence`).
+    incoherence: f64,
+    /// The other method's decision; None for the ANFIS.
+    dec: Option<&'a Decision>,
+}
+
+impl Evidence<'_> {
+    /// Group `g` departed at this epoch: its R above the gate. The GPS
+    /// velocity is judged on its own R: the IMU consistency folded into the
+    /// group's R condemns the IMU, not the GPS.
+    fn departed(&self, g: usize) -> bool {
+        let r = if g == 1 { self.r_vel } else { self.ind.r_group[g] };
+        r.is_finite() && r > GATE
+    }
+}
+
+/// Which sensor groups (GPS position, GPS velocity, baro) the filter is not
+/// fed: the gating stage's state.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct Withheld {
+    groups: [bool; GROUPS],
+    /// Consecutive baro samples consistent with the filter while withheld.
+    baro_calm: u32,
+}
+
+impl Withheld {
+    fn gps_pos(&self) -> bool {
+        self.groups[0]
+    }
+
+    fn gps_vel(&self) -> bool {
+        self.groups[1]
+    }
+
+    fn baro(&self) -> bool {
+        self.groups[2]
+    }
+
+    /// Feed every group again (normal verdict, re-anchoring, data gap). The
+    /// baro's calm count restarts at the next baro sample that is fed.
+    fn release(&mut self) {
+        self.groups = [false; GROUPS];
+    }
+
+    /// The gating stage, at a fault epoch: withhold the groups that
+    /// departed, and those that failed the method's own test. Fault memory:
+    /// a group that departed stays withheld for the rest of the episode, so
+    /// a fault that flickers around the gate cannot leak into the filter; a
+    /// group that never departed (GPS velocity during a position step or
+    /// ramp) keeps aiding it, which keeps the coast drift, and so the
+    /// departure's normalisation, small. GPS position and velocity come from
+    /// one receiver, so each can take the other with it (below).
+    fn withhold(&mut self, ev: &Evidence) {
+        for g in 0..GROUPS {
+            self.groups[g] |= ev.departed(g);
+        }
+        if let Some(d) = ev.dec {
+            for g in 0..GROUPS {
+                self.groups[g] |= d.failed[g];
+            }
+        }
+        if self.groups[1] && !self.groups[0] && ev.ind.r_group[0] > 1.5 {
+            // Bad GPS velocity with a position residual off its clean
+            // level: same receiver, do not let it re-anchor the estimate.
+            self.groups[0] = true;
+        }
+        if self.groups[0] && ev.incoherence > INCOHERENT {
+            // Position departed and the receiver's own position and
+            // velocity disagree epoch after epoch: its velocity is no
+            // better than its position (degraded fix).
+            self.groups[1] = true;
+        }
+    }
+
+    /// A baro sample with consistency `cons` (see `indicators`): a withheld
+    /// baro that follows the filter's climb again for a few samples is
+    /// released. Returns whether it was released on this sample.
+    fn baro_released(&mut self, cons: f64) -> bool {
+        if !self.groups[2] {
+            self.baro_calm = 0;
+            return false;
+        }
+        self.baro_calm = if cons < BARO_RECOVER { self.baro_calm + 1 } else { 0 };
+        if self.baro_calm < RECOVER_EPOCHS {
+            return false;
+        }
+        self.baro_calm = 0;
+        self.groups[2] = false;
+        true
+    }
+
+    /// The filter update stage: feed the fix's groups that are not
+    /// withheld; the indicator engine learns each fed axis' posterior
+    /// residual. A failed update leaves the rest unfed.
+    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6]) -> Result<(), FilterError> {
+        if !self.gps_pos() {
+            kf.update_position(&fix.y)?;
+            let p = kf.position();
+            for a in 0..3 {
+                ind.accept(a, prev_r[a], kf.position_var(a), fix.y[a] - p[a]);
+            }
+        }
+        if let (Some(v), false) = (&fix.vel, self.gps_vel()) {
+            kf.update_velocity(v)?;
+            let vel = kf.velocity();
+            for a in 0..3 {
+                ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The baro's filter update; the indicator engine learns the posterior
+/// residual (`prev_r`: the axis' previous one), and the baro test learns
+/// its σ from samples under a `normal` verdict.
+fn feed_baro(kf: &mut Kf, ind: &mut IndicatorEngine, baro: f64, prev_r: f64, normal: bool) -> Result<(), FilterError> {
+    kf.update_baro(baro)?;
+    let p_post = kf.baro_height_var();
+    let post = kf.baro_innovation(baro).nu[0];
+    ind.accept(6, prev_r, p_post, post);
+    if normal {
+        ind.accept_baro();
+    }
+    Ok(())
+}
+
+/// A fault episode: from the first fault verdict (or outage) to the epoch
+/// that ends it, with the groups it withholds.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct Episode {
+    /// Inside a fault episode; `imu`: the IMU consistency drove its first
+    /// verdict. Any other episode restarts the IMU window at every epoch, so
+    /// the GPS velocities of an outage or a GPS fault never sit in the
+    /// window that judges the clean epochs after it.
+    active: bool,
+    imu: bool,
+    /// Consecutive IMU-episode epochs whose last second was calm.
+    imu_calm: u32,
+    /// When the filter began to coast (the first fault epoch, or the last
+    /// fix before an outage), s.
+    coast_start: Option<f64>,
+    /// Consecutive fault epochs whose GPS agrees with the filter.
+    calm_epochs: u32,
+    /// The episode withheld the GPS velocity or was an outage: the filter
+    /// has coasted on the IMU alone.
+    receiver_lost: bool,
+    /// Consecutive normal GPS verdicts.
+    normal_run: u32,
+    withheld: Withheld,
+}
+
+/// What the episode stage decided at a GPS epoch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct EpisodeStep {
+    /// The epoch's verdict is a fault.
+    fault: bool,
+    /// Re-anchor the filter on this fix (coasted too long, or recovered).
+    reset: bool,
+}
+
+impl Episode {
+    /// A row without a fix declared an outage.
+    fn outage(&mut self, last_fix: Option<f64>) {
+        self.active = true;
+        self.imu = false;
+        // The filter coasts; the first fix back is judged against it.
+        self.receiver_lost = true;
+        if self.coast_start.is_none() {
+            self.coast_start = last_fix;
+        }
+    }
+
+    /// The episode stage, first half: a fault verdict opens an episode (or
+    /// continues one), an IMU episode ends once the IMU is calm again, and a
+    /// normal verdict closes it. Returns whether the epoch stays a fault.
+    fn open(&mut self, fault: bool, ind: &mut IndicatorEngine, oracle: bool) -> bool {
+        let mut fault = fault;
+        if fault {
+            if !self.active {
+                self.active = true;
+                // The IMU test alone: no other group departed (a zeroed or
+                // frozen GPS velocity also fails it, but the Δr test sees it too).
+                self.imu = ind.imu_folded() && ind.r_unfolded() < GATE;
+            }
+            if !self.imu {
+                ind.clear_imu();
+            } else if !oracle && ind.r_unfolded() < GATE {
+                // The 3 s window still spans the fault for 3 s after it
+                // ends; the last second says sooner whether z still drifts.
+                // Calm for a few epochs: the episode is over, and the window
+                // restarts on post-fault data.
+                let calm = ind.imu_recent(IMU_RECENT_S) < IMU_CALM;
+                self.imu_calm = if calm { self.imu_calm + 1 } else { 0 };
+                if self.imu_calm >= RECOVER_EPOCHS {
+                    fault = false;
+                    ind.clear_imu();
+                }
+            }
+        }
+        if !fault {
+            self.active = false;
+            self.imu = false;
+            self.imu_calm = 0;
+        }
+        fault
+    }
+
+    /// The episode stage, second half, with the gating stage inside it: a
+    /// fault epoch withholds what departed and may end the episode by
+    /// re-anchoring (past `max_coast` s, or recovered); a normal one
+    /// releases every group.
+    fn step(&mut self, t: f64, fault: bool, ev: &Evidence, max_coast: f64, oracle: bool) -> EpisodeStep {
+        if !fault {
+            self.normal_epoch();
+            return EpisodeStep { fault: false, reset: false };
+        }
+        let start = *self.coast_start.get_or_insert(t);
+        let coasted_out = t - start > max_coast;
+        self.withheld.withhold(ev);
+        self.normal_run = 0;
+        if self.withheld.gps_vel() {
+            self.receiver_lost = true;
+        }
+        let recovered = self.recovered(t - start, ev, oracle);
+        EpisodeStep { fault: !recovered, reset: coasted_out || recovered }
+    }
+
+    /// Whether the episode, `elapsed` s old, is over and the filter should
+    /// re-anchor on GPS. When the whole receiver was withheld (outage,
+    /// degraded fix) the filter coasted on the IMU alone and the position
+    /// offset is its own drift, whatever its size: recover on agreement of
+    /// the increments and a clean velocity. When only the position was
+    /// withheld (velocity kept aiding), a large offset is the fault itself
+    /// (a persisting step) and is kept until `maxCoast`. A position-only
+    /// episode also needs the position–velocity test back in its clean
+    /// range, so a ramp that paused the verdict is not re-anchored on. An
+    /// IMU episode ends when the IMU agrees with the GPS again (`open`), not
+    /// by re-anchoring on a GPS that never departed.
+    fn recovered(&mut self, elapsed: f64, ev: &Evidence, oracle: bool) -> bool {
+        let ind = ev.ind;
+        let offset_ok = if self.receiver_lost {
+            !(ind.r_group[1] > RECOVER_R)
+        } else {
+            !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV)
+        };
+        let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !ev.departed(2);
+        self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
+        !oracle && !self.imu && self.calm_epochs >= RECOVER_EPOCHS && elapsed > 0.5
+    }
+
+    /// A normal GPS verdict.
+    fn normal_epoch(&mut self) {
+        self.calm_epochs = 0;
+        self.coast_start = None;
+        self.withheld.release();
+        // A single normal verdict inside a coast does not end it: the
+        // filter's offset is still the coast's until the GPS has been
+        // accepted for a few epochs.
+        self.normal_run += 1;
+        if self.normal_run >= RECOVER_EPOCHS {
+            self.receiver_lost = false;
+        }
+    }
+
+    /// The filter was re-anchored on GPS: nothing coasts any more.
+    fn reanchored(&mut self) {
+        self.coast_start = None;
+        self.calm_epochs = 0;
+        self.withheld.release();
+        self.receiver_lost = false;
+    }
+}
+
+/// The online-learning state (eqs. 15–20): the ANFIS, its databases, and
+/// the validation set a retrained ANFIS must not do worse on.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Learning {
+    anfis: Anfis,
+    d1: Ring,
+    d2: Ring,
+    /// D2 entries since the last retraining.
+    new_faults: usize,
     /// Retraining scratch (contents do not outlive `retrain`).
     #[serde(skip)]
     train_x: Vec<[f64; 2]>,
@@ -379,15 +971,37 @@ pub struct Detector {
     /// set a retrained ANFIS must not do worse on.
     d0_x: Vec<[f64; 2]>,
     d0_y: Vec<f64>,
-    /// Previous GPS epoch's innovations (pos, vel) for Δr; None after a
-    /// (re)initialisation.
-    prev_nu: Option<[f64; 6]>,
-    /// Reference windows of the `mahalanobis` method (position, velocity).
-    maha: [MahaWindow; 2],
-    /// Largest-γ baro innovation (ν, S) since the last GPS epoch.
-    baro_inn: Option<(f64, f64)>,
-    /// Threshold pool of the `rms`, `knee` and `adaptive` methods.
-    pool: Option<PoolState>,
+}
+
+impl Learning {
+    fn new(model: &Model, q: usize) -> Self {
+        Learning {
+            anfis: model.anfis.clone(),
+            d1: Ring::new(q, &model.d1),
+            d2: Ring::new(q, &model.d2),
+            new_faults: 0,
+            train_x: Vec::with_capacity(2 * q),
+            train_y: Vec::with_capacity(2 * q),
+            d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
+            d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
+        }
+    }
+
+    /// File an ANFIS epoch (input `x`, F-indicator `f`) by its own verdict
+    /// (eqs. 15–20), but only a confident one: a fault verdict with
+    /// F ≥ 0.8 and a fault signature, a normal one with F ≤ 0.2. Borderline
+    /// verdicts, where a false alarm would sit, are not fed back, so
+    /// retraining cannot teach itself its own mistakes.
+    fn file(&mut self, fault: bool, f: f64, x: [f64; 2], ind: &Indicators) {
+        if fault {
+            if f >= CONFIDENT_FAULT && has_signature(ind.r, ind.c) {
+                self.d2.push(x);
+                self.new_faults += 1;
+            }
+        } else if f <= CONFIDENT_NORMAL {
+            self.d1.push(x);
+        }
+    }
 }
 
 impl Detector {
@@ -402,56 +1016,27 @@ impl Detector {
             _ => None,
         };
         let mut det = Self::with_model(cfg, &model);
-        det.pool = pool;
+        det.methods.pool = pool;
         Ok(det)
     }
 
     pub fn with_model(cfg: Config, model: &Model) -> Self {
-        let q = cfg.q;
         Detector {
-            anfis: model.anfis.clone(),
-            d1: Ring::new(q, &model.d1),
-            d2: Ring::new(q, &model.d2),
-            new_faults: 0,
             kf: None,
             anchor: None,
-            ind: IndicatorEngine::new(cfg.indicator_settings()),
             imu: None,
-            last_t: None,
-            last_fix_t: None,
-            fix_seen: false,
-            gps_dt: 0.2,
-            gps_jitter: 0.0,
+            ind: IndicatorEngine::new(cfg.indicator_settings()),
+            clock: Clock::new(),
+            last_est: LastEstimate { pos: Vector3::zeros(), vel: Vector3::zeros(), baro_h: None },
+            consistency: Consistency::new(),
+            episode: Episode::default(),
+            methods: Methods::default(),
+            learning: Learning::new(model, cfg.q),
             resid: [f64::NAN; 7],
-            prev_pos: Vector3::zeros(),
-            prev_vel: Vector3::zeros(),
-            prev_baro_h: None,
-            last_gps: None,
-            coast_start: None,
-            calm_epochs: 0,
-            receiver_lost: false,
-            normal_run: 0,
-            group_bad: [false; GROUPS],
-            alt_int: 0.0,
-            dv_imu: Vector3::zeros(),
-            imu_gap: true,
-            flight_time: 0.0,
-            in_episode: false,
-            imu_episode: false,
-            imu_calm: 0,
-            baro_calm: 0,
             last: Output { kind: kind::NO_GPS, driver: 255, ..Output::default() },
             last_ind: Indicators::default(),
             stats: Stats::default(),
             oracle: false,
-            train_x: Vec::with_capacity(2 * q),
-            train_y: Vec::with_capacity(2 * q),
-            d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
-            d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
-            prev_nu: None,
-            maha: Default::default(),
-            baro_inn: None,
-            pool: None,
             cfg,
         }
     }
@@ -466,18 +1051,19 @@ impl Detector {
             return Err("config does not validate to itself".into());
         }
         let q = self.cfg.q;
-        self.d1.check_shape(q, "D1")?;
-        self.d2.check_shape(q, "D2")?;
+        let l = &mut self.learning;
+        l.d1.check_shape(q, "D1")?;
+        l.d2.check_shape(q, "D2")?;
         self.ind.check_shape(&self.cfg.indicator_settings())?;
-        if self.d0_x.len() != self.d0_y.len() {
-            return Err(format!("D0: {} samples but {} labels", self.d0_x.len(), self.d0_y.len()));
+        if l.d0_x.len() != l.d0_y.len() {
+            return Err(format!("D0: {} samples but {} labels", l.d0_x.len(), l.d0_y.len()));
         }
-        crate::config::check_anfis(&self.anfis).map_err(|e| format!("anfis: {e}"))?;
-        for w in &self.maha {
+        crate::config::check_anfis(&l.anfis).map_err(|e| format!("anfis: {e}"))?;
+        for w in &self.methods.maha {
             w.check_shape()?;
         }
         let pooled = matches!(self.cfg.method, Method::Rms | Method::Knee | Method::Adaptive);
-        match &self.pool {
+        match &self.methods.pool {
             Some(p) if pooled => p.eval.check_shape()?,
             None if !pooled => {}
             _ => {
@@ -487,14 +1073,14 @@ impl Detector {
                 ))
             }
         }
-        self.train_x = Vec::with_capacity(2 * q);
-        self.train_y = Vec::with_capacity(2 * q);
+        l.train_x = Vec::with_capacity(2 * q);
+        l.train_y = Vec::with_capacity(2 * q);
         Ok(())
     }
 
     #[cfg(all(test, not(target_arch = "wasm32")))]
     pub(crate) fn forge_ring_head_for_test(&mut self, head: usize) {
-        self.d1.head = head;
+        self.learning.d1.head = head;
     }
 
     /// Teacher forcing for building training data: decisions follow the
@@ -512,7 +1098,7 @@ impl Detector {
     }
 
     pub fn anfis(&self) -> &Anfis {
-        &self.anfis
+        &self.learning.anfis
     }
 
     /// The local NED anchor (first valid fix), once known.
@@ -549,7 +1135,7 @@ impl Detector {
     /// Check a row without touching state. `row` is used for the message.
     pub fn validate(&self, s: &Sample, row: u64) -> Result<(), InputError> {
         validate_sample(s, row)?;
-        if let Some(lt) = self.last_t {
+        if let Some(lt) = self.clock.last_t {
             if s.t < lt {
                 return Err(InputError {
                     row,
@@ -567,112 +1153,83 @@ impl Detector {
         Ok(self.push_valid(s))
     }
 
-    /// Process a row already validated (see [`Detector::validate`]).
+    /// Process a row already validated (see [`Detector::validate`]): predict
+    /// the filter to the row's time with the IMU held from an earlier row,
+    /// hold this row's IMU, feed its baro, then judge its fix (or its lack
+    /// of one).
     pub fn push_valid(&mut self, s: &Sample) -> Output {
         self.stats.rows += 1;
         self.resid = [f64::NAN; 7];
         let t = s.t;
-        let dt = self.last_t.map_or(0.0, |lt| t - lt);
-        if self.last_t.is_some() && dt > self.cfg.data_gap {
-            // Every sensor stopped: a logging gap, not a navigation fault.
-            self.stats.data_gaps += 1;
-            // No verdict carries across a gap: it starts from "no GPS yet".
-            self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
-            self.kf = None;
-            self.imu = None;
-            self.ind.reset_references();
-            self.prev_baro_h = None;
-            self.coast_start = None;
-            self.group_bad = [false; GROUPS];
-            if self.last_fix_t.is_some() {
-                self.last_fix_t = Some(t);
-            }
+        let (dt, gap) = self.clock.row(t, self.cfg.data_gap);
+        if gap {
+            self.data_gap();
         }
-        self.last_t = Some(t);
-
-        // Predict to this row's time with the IMU held from the previous row.
         if dt > 0.0 {
-            let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
-            if let Some(kf) = self.kf.as_mut() {
-                let v0 = kf.velocity();
-                match kf.predict(dt, imu.as_ref()) {
-                    Ok(()) => {
-                        let v1 = kf.velocity();
-                        if kf_flying(kf) {
-                            self.flight_time += dt;
-                        }
-                        self.alt_int -= 0.5 * (v0[2] + v1[2]) * dt;
-                        if imu.is_some() {
-                            self.dv_imu += v1 - v0;
-                        } else {
-                            self.imu_gap = true;
-                        }
-                    }
-                    Err(e) => self.filter_failed(e),
-                }
-            }
+            self.predict(t, dt);
         }
+        self.hold_imu(t, s);
+        if s.has_baro() {
+            self.stats.baro_rows += 1;
+            self.baro_row(t, s.baro);
+        }
+        let mut out = if s.has_fix() { self.gps_epoch(s) } else { self.between_fixes(t, s) };
+        out.t = t;
+        self.last = out;
+        out
+    }
+
+    /// Every sensor stopped: a logging gap, not a navigation fault. No
+    /// verdict carries across it: it starts from "no GPS yet".
+    fn data_gap(&mut self) {
+        self.stats.data_gaps += 1;
+        self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
+        self.kf = None;
+        self.imu = None;
+        self.ind.reset_references();
+        self.last_est.baro_h = None;
+        self.episode.coast_start = None;
+        self.episode.withheld.release();
+    }
+
+    /// Predict the filter by `dt` s to `t`, on the held IMU if it is recent.
+    fn predict(&mut self, t: f64, dt: f64) {
+        let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
+        let Some(kf) = self.kf.as_mut() else { return };
+        let v0 = kf.velocity();
+        match kf.predict(dt, imu.as_ref()) {
+            Ok(()) => self.consistency.advance(dt, v0, kf.velocity(), kf_flying(kf), imu.is_some()),
+            Err(e) => self.filter_failed(e),
+        }
+    }
+
+    /// Hold the row's IMU sample for the next prediction.
+    fn hold_imu(&mut self, t: f64, s: &Sample) {
         if s.has_accel() && s.has_attitude() {
             if let Some(q) = quat_from_wxyz(s.qw, s.qx, s.qy, s.qz) {
                 self.imu = Some((t, ImuInput { f_body: Vector3::new(s.ax, s.ay, s.az), q }));
                 self.stats.imu_rows += 1;
             }
         }
-        if s.has_baro() {
-            self.stats.baro_rows += 1;
-            self.baro_row(t, s.baro);
-        }
-
-        let mut out = if s.has_fix() {
-            self.gps_epoch(s)
-        } else {
-            let mut o = self.last;
-            o.gps_epoch = false;
-            if self.is_outage(t, s) {
-                o.status = 1;
-                o.kind = kind::OUTAGE;
-                o.f = 1.0;
-                self.ind.clear_imu();
-                self.in_episode = true;
-                self.imu_episode = false;
-                // The filter coasts; the first fix back is judged against it.
-                self.receiver_lost = true;
-                if self.coast_start.is_none() {
-                    self.coast_start = self.last_fix_t;
-                }
-            } else if o.kind == kind::OUTAGE {
-                o.status = 0;
-                o.kind = kind::NORMAL;
-            }
-            o
-        };
-        out.t = t;
-        self.last = out;
-        out
     }
 
-    /// Outage: after a fix has been seen, the receiver says it has none, or
-    /// (flying) no fix arrived within the timeout; it lasts until the next
-    /// fix. A receiver that reports losing its fix is an outage on the
-    /// ground too; mere silence counts only in flight (logs often stop
-    /// sending GPS after landing).
-    fn is_outage(&self, t: f64, s: &Sample) -> bool {
-        let Some(lf) = self.last_fix_t else {
-            return false;
-        };
-        if !self.fix_seen {
-            return false;
+    /// A row without a fix carries the last epoch's verdict, or is an
+    /// outage (see `Clock::is_outage`).
+    fn between_fixes(&mut self, t: f64, s: &Sample) -> Output {
+        let mut o = self.last;
+        o.gps_epoch = false;
+        let in_outage = self.last.kind == kind::OUTAGE;
+        if self.clock.is_outage(t, s.reports_no_fix(), in_outage, self.flying(), self.cfg.outage_timeout) {
+            o.status = 1;
+            o.kind = kind::OUTAGE;
+            o.f = 1.0;
+            self.ind.clear_imu();
+            self.episode.outage(self.clock.last_fix);
+        } else if o.kind == kind::OUTAGE {
+            o.status = 0;
+            o.kind = kind::NORMAL;
         }
-        if self.last.kind == kind::OUTAGE {
-            return true;
-        }
-        if s.reports_no_fix() && t - lf > 0.5 * self.gps_dt {
-            return true;
-        }
-        // 1.5 periods, or more for a jittery receiver: a late fix is not an outage.
-        let auto = (1.5 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
-        let timeout = self.cfg.outage_timeout.unwrap_or(auto);
-        self.flying() && t - lf > timeout
+        o
     }
 
     /// Flying: moving faster than 1 m/s or more than 2 m above the anchor.
@@ -685,382 +1242,150 @@ impl Detector {
         self.stats.filter_errors += 1;
         self.kf = None;
         self.ind.reset_references();
-        self.prev_baro_h = None;
-        self.imu_gap = true;
+        self.last_est.baro_h = None;
+        self.consistency.imu_gap = true;
     }
 
+    /// A baro sample: its residual and vertical consistency are observed; a
+    /// withheld baro may be released; a fed one updates the filter.
     fn baro_row(&mut self, t: f64, baro: f64) {
         let Some(kf) = self.kf.as_mut() else { return };
         if !kf.baro_initialised() {
+            // The first sample fixes the baro offset (no shared datum).
             if kf.update_baro(baro).is_ok() {
-                self.prev_baro_h = Some(-kf.position()[2] + kf.x[9]);
+                self.last_est.baro_h = Some(kf.baro_height());
             }
             return;
         }
         let inn = kf.baro_innovation(baro);
         self.resid[6] = inn.nu[0];
-        let g = |(nu, s): (f64, f64)| nu.abs() / s.max(1e-12).sqrt();
-        if self.baro_inn.is_none_or(|b| g((inn.nu[0], inn.s[0])) > g(b)) {
-            self.baro_inn = Some((inn.nu[0], inn.s[0]));
-        }
-        let h_prior = -kf.x[2] + kf.x[9];
-        let m = self.prev_baro_h.map_or(0.0, |p| h_prior - p);
+        self.methods.note_baro(inn.nu[0], inn.s[0]);
+        let m = self.last_est.baro_h.map_or(0.0, |p| kf.baro_height() - p);
         let prev = self.ind.previous(6);
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
-        let cons = self.ind.observe_baro(t, baro - self.alt_int, self.group_bad[2]);
-        if self.group_bad[2] {
-            // Withheld baro that follows the filter's climb again (its change
+        let cons = self.ind.observe_baro(t, baro - self.consistency.alt_int, self.episode.withheld.baro());
+        if self.episode.withheld.baro_released(cons) {
+            // The withheld baro follows the filter's climb again (its change
             // since before the fault is consistent): the fault is over, but
             // the offset state absorbed part of it before detection, so
             // re-anchor the offset instead of judging the baro against it.
-            self.baro_calm = if cons < BARO_RECOVER { self.baro_calm + 1 } else { 0 };
-            if self.baro_calm >= RECOVER_EPOCHS {
-                self.baro_calm = 0;
-                self.group_bad[2] = false;
-                kf.reset_baro();
-                self.ind.reset_axis(6);
-                self.ind.clear_baro();
-                if kf.update_baro(baro).is_ok() {
-                    self.prev_baro_h = Some(-kf.x[2] + kf.x[9]);
-                }
+            kf.reset_baro();
+            self.ind.reset_axis(6);
+            self.ind.clear_baro();
+            if kf.update_baro(baro).is_ok() {
+                self.last_est.baro_h = Some(kf.baro_height());
+            }
+            return;
+        }
+        if !self.episode.withheld.baro() {
+            if let Err(e) = feed_baro(kf, &mut self.ind, baro, prev, self.last.status == 0) {
+                self.filter_failed(e);
                 return;
             }
+        }
+        self.last_est.baro_h = Some(kf.baro_height());
+    }
+
+    /// The first fix, or the first after a data gap or a filter error,
+    /// starts the filter on it.
+    fn start_filter(&mut self, fix: &Fix) {
+        let noise = self.cfg.filter_noise();
+        let v0 = fix.vel.unwrap_or_else(Vector3::zeros);
+        let vs = if fix.vel.is_some() { noise.gps_vel } else { 3.0 };
+        self.kf = Some(Kf::new(noise, fix.y, v0, noise.gps_pos_h, vs));
+        self.last_est.pos = fix.y;
+        self.last_est.vel = v0;
+        self.ind.reset_references();
+        self.consistency.imu_gap = true;
+        self.episode.coast_start = None;
+        self.methods.prev_nu = None;
+    }
+
+    /// A GPS epoch, stage by stage: residuals (the fix against the filter's
+    /// prediction), tests (indicators closed), decision (the method's
+    /// verdict), episode (its start and IMU part), gating (what the filter
+    /// is not fed) and the episode's end, filter update (or re-anchoring),
+    /// learning (databases, retraining, reference windows).
+    fn gps_epoch(&mut self, s: &Sample) -> Output {
+        self.stats.gps_epochs += 1;
+        self.clock.fix(s.t);
+        let anchor = *self.anchor.get_or_insert_with(|| Anchor::from_sample(s));
+        let fix = Fix::new(s, &anchor);
+        let Some(kf) = self.kf.as_mut() else {
+            self.start_filter(&fix);
+            return Output { t: fix.t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
+        };
+        let res = self.last_est.residuals(kf, &mut self.ind, &fix);
+        res.write(&mut self.resid);
+        let ind = self.consistency.tests(&mut self.ind, &fix, self.episode.withheld.gps_vel());
+        self.last_ind = ind;
+        let label = self.oracle.then_some(s.label);
+        let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
+        let fault = self.episode.open(verdict.fault, &mut self.ind, self.oracle);
+        // While the IMU is the suspect, its bias estimate is not learnt from
+        // the fault (or the test would see the learnt error after it ends).
+        kf.set_hold_bias(self.episode.imu);
+        let ev = Evidence {
+            ind: &ind,
+            r_vel: self.ind.r_vel_unfolded(),
+            incoherence: self.ind.incoherence(),
+            dec: verdict.dec.as_ref(),
+        };
+        let step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
+        let fed = if step.reset {
+            // Coasted too long to judge (or recovered): re-anchor on GPS.
+            kf.reset_to(&fix.y, fix.vel.as_ref());
+            Ok(())
         } else {
-            self.baro_calm = 0;
+            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r)
+        };
+        self.last_est.set_epoch(kf);
+        if step.reset {
+            self.reanchored();
         }
-        if !self.group_bad[2] {
-            match kf.update_baro(baro) {
-                Ok(()) => {
-                    let p_post = kf.P[(2, 2)] + kf.P[(9, 9)] - 2.0 * kf.P[(2, 9)];
-                    let post = kf.baro_innovation(baro).nu[0];
-                    self.ind.accept(6, prev, p_post, post);
-                    if self.last.status == 0 {
-                        self.ind.accept_baro();
-                    }
-                }
-                Err(e) => {
-                    self.filter_failed(e);
-                    return;
-                }
-            }
+        if let Err(e) = fed {
+            self.filter_failed(e);
         }
-        if let Some(kf) = self.kf.as_ref() {
-            self.prev_baro_h = Some(-kf.x[2] + kf.x[9]);
+        self.learn(step.fault, &verdict, &ind);
+        Output {
+            t: fix.t,
+            status: step.fault as u8,
+            f: verdict.f,
+            r: ind.r,
+            c: ind.c,
+            kind: if step.fault { kind::RESIDUAL } else { kind::NORMAL },
+            gps_epoch: true,
+            driver: ind.r_driver().map_or(255, |g| g as u8),
         }
     }
 
-    fn gps_epoch(&mut self, s: &Sample) -> Output {
-        self.stats.gps_epochs += 1;
-        let t = s.t;
-        if let Some(lf) = self.last_fix_t {
-            let d = t - lf;
-            if d > 0.0 && d < 5.0 {
-                // Learn the GPS period for the outage timeout.
-                self.gps_jitter += 0.05 * ((d - self.gps_dt).abs() - self.gps_jitter);
-                self.gps_dt += 0.05 * (d - self.gps_dt);
-            }
-        }
-        let anchor = *self.anchor.get_or_insert_with(|| Anchor::from_sample(s));
-        let y = anchor.to_ned(s);
-        let vel = s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd));
-        self.last_fix_t = Some(t);
-        self.fix_seen = true;
+    /// The filter was re-anchored on GPS: every reference restarts.
+    fn reanchored(&mut self) {
+        self.stats.filter_resets += 1;
+        self.episode.reanchored();
+        self.ind.reset_references();
+        self.last_est.baro_h = None;
+        self.methods.prev_nu = None;
+    }
 
-        let Some(kf) = self.kf.as_mut() else {
-            let noise = self.cfg.filter_noise();
-            let v0 = vel.unwrap_or_else(Vector3::zeros);
-            let vs = if vel.is_some() { noise.gps_vel } else { 3.0 };
-            self.kf = Some(Kf::new(noise, y, v0, noise.gps_pos_h, vs));
-            self.prev_pos = y;
-            self.prev_vel = v0;
-            self.ind.reset_references();
-            self.imu_gap = true;
-            self.coast_start = None;
-            self.prev_nu = None;
-            return Output { t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
-        };
-
-        // Residuals and predicted changes since the last epoch.
-        let pin = kf.position_innovation(&y);
-        self.resid[..3].copy_from_slice(&pin.nu);
-        let pos_prior = kf.position();
-        let mut prev_r = [0.0; 6];
-        for a in 0..3 {
-            prev_r[a] = self.ind.previous(a);
-            self.ind.observe(a, pin.nu[a], pos_prior[a] - self.prev_pos[a], kf.P[(a, a)]);
+    /// The learning stage: the ANFIS files the epoch (see `Learning::file`)
+    /// and retrains after TC new faults; a normal epoch also teaches the
+    /// reference windows of the other tests.
+    fn learn(&mut self, fault: bool, v: &Verdict, ind: &Indicators) {
+        let anfis = v.dec.is_none();
+        if anfis {
+            self.learning.file(fault, v.f, v.x, ind);
         }
-        let vel_prior = kf.velocity();
-        let mut vin_opt = None;
-        if let Some(v) = &vel {
-            let vin = kf.velocity_innovation(v);
-            vin_opt = Some(vin);
-            self.resid[3..6].copy_from_slice(&vin.nu);
-            for a in 0..3 {
-                prev_r[3 + a] = self.ind.previous(3 + a);
-                self.ind.observe(3 + a, vin.nu[a], vel_prior[a] - self.prev_vel[a], kf.P[(3 + a, 3 + a)]);
-            }
-        }
-        // Position–velocity consistency: the GPS's own position change
-        // against the trapezoid of its velocities (filter-independent).
-        // Not while the velocity is withheld: a biased velocity (degraded
-        // fix, frozen or zeroed output) would fill the window with its own
-        // bias and hold the test up after it clears.
-        match (&vel, self.last_gps) {
-            (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
-                let dtg = t - pt;
-                let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
-                self.ind.observe_pv(u, !self.group_bad[1]);
-            }
-            _ => self.ind.clear_pv(),
-        }
-        self.last_gps = vel.map(|v| (t, y, v));
-        // IMU consistency: GPS horizontal velocity against the filter's
-        // IMU-predicted velocity changes, only while every prediction since
-        // the last epoch ran on the IMU.
-        if self.imu_gap {
-            self.ind.clear_imu();
-            self.imu_gap = false;
-        }
-        match &vel {
-            Some(v) => self.ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
-            None => self.ind.clear_imu(),
-        }
-        self.ind.set_imu_fold(self.flight_time >= IMU_ARM_S && self.ind.imu_learnt() >= IMU_ARM_WINDOWS);
-        let ind = self.ind.close_epoch();
-        self.last_ind = ind;
-        let x = inputs(ind.r, ind.c);
-        let f_anfis = self.anfis.eval(&x);
-        // Another method's decision on the same innovations (see `methods`);
-        // nothing to build for the default ANFIS.
-        let baro_inn = self.baro_inn.take();
-        let mut dr = [[f64::NAN; 3]; 2];
-        let dec: Option<Decision> = if self.cfg.method == Method::Anfis {
-            None
-        } else {
-            let mut nu = [f64::NAN; 6];
-            nu[..3].copy_from_slice(&pin.nu);
-            let mut inn = EpochInnovations { nu, s: kf.P.fixed_view::<6, 6>(0, 0).into_owned(), m: 3, baro: baro_inn };
-            for a in 0..3 {
-                inn.s[(a, a)] = pin.s[a];
-            }
-            if let Some(vin) = &vin_opt {
-                inn.m = 6;
-                for a in 0..3 {
-                    inn.nu[3 + a] = vin.nu[a];
-                    inn.s[(3 + a, 3 + a)] = vin.s[a];
-                }
-            }
-            dr = core::array::from_fn(|g| {
-                core::array::from_fn(|a| self.prev_nu.map_or(f64::NAN, |p| inn.nu[3 * g + a] - p[3 * g + a]))
-            });
-            self.prev_nu = Some(inn.nu);
-            match self.cfg.method {
-                Method::Anfis => None,
-                Method::Chi2 => Some(methods::chi2(&inn)),
-                Method::Nis => Some(methods::nis(&inn)),
-                Method::Gate => Some(methods::gate(&inn)),
-                Method::Mahalanobis => Some(methods::mahalanobis(&self.maha, dr, inn.m == 6)),
-                Method::Rms | Method::Knee | Method::Adaptive => {
-                    let v = kf.velocity();
-                    let speed = v[0].hypot(v[1]);
-                    self.pool.as_mut().map(|p| p.decide(&inn, speed))
-                }
-            }
-        };
-        let f = dec.map_or(f_anfis, |d| d.score);
-        let th = if dec.is_some() { 1.0 } else { self.cfg.threshold };
-        let mut fault = if self.oracle { s.label >= 0.5 } else { f >= th };
         if fault {
-            if !self.in_episode {
-                self.in_episode = true;
-                // The IMU test alone: no other group departed (a zeroed or
-                // frozen GPS velocity also fails it, but the Δr test sees it too).
-                self.imu_episode = self.ind.imu_folded() && self.ind.r_unfolded() < GATE;
-            }
-            if !self.imu_episode {
-                self.ind.clear_imu();
-            } else if !self.oracle && self.ind.r_unfolded() < GATE {
-                // The 3 s window still spans the fault for 3 s after it
-                // ends; the last second says sooner whether z still drifts.
-                // Calm for a few epochs: the episode is over, and the window
-                // restarts on post-fault data.
-                let calm = self.ind.imu_recent(IMU_RECENT_S) < IMU_CALM;
-                self.imu_calm = if calm { self.imu_calm + 1 } else { 0 };
-                if self.imu_calm >= RECOVER_EPOCHS {
-                    fault = false;
-                    self.ind.clear_imu();
-                }
-            }
-        }
-        if !fault {
-            self.in_episode = false;
-            self.imu_episode = false;
-            self.imu_calm = 0;
-        }
-        // While the IMU is the suspect, its bias estimate is not learnt from
-        // the fault (or the test would see the learnt error after it ends).
-        kf.set_hold_bias(self.imu_episode);
-
-        // Gate: during a fault, withhold the sensors that departed. GPS
-        // position and velocity come from one receiver and go together.
-        let mut reset = false;
-        if fault {
-            let start = *self.coast_start.get_or_insert(t);
-            if t - start > self.cfg.max_coast {
-                reset = true;
-            }
-            // The IMU consistency condemns the IMU, not the GPS: the GPS
-            // velocity is withheld on its own departure only.
-            let r_vel = self.ind.r_vel_unfolded();
-            let bad = |g: usize| {
-                let r = if g == 1 { r_vel } else { ind.r_group[g] };
-                r.is_finite() && r > GATE
-            };
-            // Fault memory: a group that departed stays withheld for the rest
-            // of the episode, so a fault that flickers around the gate cannot
-            // leak into the filter; a group that never departed (GPS velocity
-            // during a position step or ramp) keeps aiding it, which keeps the
-            // coast drift, and so the departure's normalisation, small.
-            for g in 0..GROUPS {
-                self.group_bad[g] |= bad(g);
-            }
-            // A group that failed the method's own test is withheld too.
-            if let Some(d) = &dec {
-                for g in 0..GROUPS {
-                    self.group_bad[g] |= d.failed[g];
-                }
-            }
-            if self.group_bad[1] && !self.group_bad[0] && ind.r_group[0] > 1.5 {
-                // Bad GPS velocity with a position residual off its clean
-                // level: same receiver, do not let it re-anchor the estimate.
-                self.group_bad[0] = true;
-            }
-            if self.group_bad[0] && self.ind.incoherence() > INCOHERENT {
-                // Position departed and the receiver's own position and
-                // velocity disagree epoch after epoch: its velocity is no
-                // better than its position (degraded fix).
-                self.group_bad[1] = true;
-            }
-            self.normal_run = 0;
-            if self.group_bad[1] {
-                self.receiver_lost = true;
-            }
-            // When the whole receiver was withheld (outage, degraded fix) the
-            // filter coasted on the IMU alone and the position offset is its
-            // own drift, whatever its size: recover on agreement of the
-            // increments and a clean velocity. When only the position was
-            // withheld (velocity kept aiding), a large offset is the fault
-            // itself (a persisting step) and is kept until `maxCoast`.
-            // A position-only episode also needs the position–velocity test
-            // back in its clean range, so a ramp that paused the verdict is
-            // not re-anchored on.
-            let offset_ok = if self.receiver_lost {
-                !(ind.r_group[1] > RECOVER_R)
-            } else {
-                !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV)
-            };
-            let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !bad(2);
-            self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
-            // An IMU episode ends when the IMU agrees with the GPS again, not
-            // by re-anchoring on a GPS that never departed.
-            if !self.oracle && !self.imu_episode && self.calm_epochs >= RECOVER_EPOCHS && t - start > 0.5 {
-                // The GPS is self-consistent again and the offset is within
-                // what the coast could have drifted: re-anchor, verdict normal.
-                reset = true;
-                fault = false;
-            }
-        } else {
-            self.calm_epochs = 0;
-            self.coast_start = None;
-            self.group_bad = [false; GROUPS];
-            // A single normal verdict inside a coast does not end it: the
-            // filter's offset is still the coast's until the GPS has been
-            // accepted for a few epochs.
-            self.normal_run += 1;
-            if self.normal_run >= RECOVER_EPOCHS {
-                self.receiver_lost = false;
-            }
-        }
-        let mut err = None;
-        if reset {
-            // Coasted too long to judge (or recovered): re-anchor on GPS.
-            kf.reset_to(&y, vel.as_ref());
-            self.stats.filter_resets += 1;
-            self.coast_start = None;
-            self.calm_epochs = 0;
-            self.group_bad = [false; GROUPS];
-            self.receiver_lost = false;
-            self.ind.reset_references();
-            self.prev_baro_h = None;
-            self.prev_nu = None;
-        } else {
-            if !self.group_bad[0] {
-                match kf.update_position(&y) {
-                    Ok(()) => {
-                        for a in 0..3 {
-                            let post = y[a] - kf.x[a];
-                            self.ind.accept(a, prev_r[a], kf.P[(a, a)], post);
-                        }
-                    }
-                    Err(e) => err = Some(e),
-                }
-            }
-            if let (Some(v), false, None) = (&vel, self.group_bad[1], &err) {
-                match kf.update_velocity(v) {
-                    Ok(()) => {
-                        for a in 0..3 {
-                            let post = v[a] - kf.x[3 + a];
-                            self.ind.accept(3 + a, prev_r[3 + a], kf.P[(3 + a, 3 + a)], post);
-                        }
-                    }
-                    Err(e) => err = Some(e),
-                }
-            }
-        }
-        self.prev_pos = kf.position();
-        self.prev_vel = kf.velocity();
-        if let Some(e) = err {
-            self.filter_failed(e);
-        }
-
-        // Online cycle: file this epoch by its own verdict (eqs. 15–20), but
-        // only a confident one: a fault verdict with F ≥ 0.8 and a fault
-        // signature, a normal one with F ≤ 0.2. Borderline verdicts, where a
-        // false alarm would sit, are not fed back, so retraining cannot
-        // teach itself its own mistakes.
-        let anfis = dec.is_none();
-        if fault {
-            if anfis && f >= CONFIDENT_FAULT && has_signature(ind.r, ind.c) {
-                self.d2.push(x);
-                self.new_faults += 1;
-            }
-            if anfis && self.cfg.retrain && !self.oracle && self.new_faults >= self.cfg.tc {
+            if anfis && self.cfg.retrain && !self.oracle && self.learning.new_faults >= self.cfg.tc {
                 self.retrain();
             }
         } else {
-            if anfis && f <= CONFIDENT_NORMAL {
-                self.d1.push(x);
-            }
-            if self.cfg.method == Method::Mahalanobis {
-                for g in 0..2 {
-                    self.maha[g].push(dr[g]);
-                }
-            }
+            self.methods.learn_normal(self.cfg.method, v.dr);
             self.ind.accept_pv();
             if self.flying() {
                 self.ind.accept_imu();
             }
-        }
-        let driver = ind.r_driver().map_or(255, |g| g as u8);
-        Output {
-            t,
-            status: fault as u8,
-            f,
-            r: ind.r,
-            c: ind.c,
-            kind: if fault { kind::RESIDUAL } else { kind::NORMAL },
-            gps_epoch: true,
-            driver,
         }
     }
 
@@ -1070,23 +1395,23 @@ impl Detector {
     /// current one: online data may drift, but not so far that the detector
     /// forgets the labelled faults it shipped with.
     pub fn retrain(&mut self) {
-        self.new_faults = 0;
-        self.train_x.clear();
-        self.train_y.clear();
-        for x in self.d1.items() {
-            self.train_x.push(*x);
-            self.train_y.push(0.0);
+        self.learning.new_faults = 0;
+        self.learning.train_x.clear();
+        self.learning.train_y.clear();
+        for x in self.learning.d1.items() {
+            self.learning.train_x.push(*x);
+            self.learning.train_y.push(0.0);
         }
-        for x in self.d2.items() {
-            self.train_x.push(*x);
-            self.train_y.push(1.0);
+        for x in self.learning.d2.items() {
+            self.learning.train_x.push(*x);
+            self.learning.train_y.push(1.0);
         }
-        let mut cand = self.anfis.clone();
-        cand.train_hybrid(&self.train_x, &self.train_y, TRAIN_EPOCHS, TRAIN_LR);
+        let mut cand = self.learning.anfis.clone();
+        cand.train_hybrid(&self.learning.train_x, &self.learning.train_y, TRAIN_EPOCHS, TRAIN_LR);
         // Validation on D0: the candidate must classify the shipped model's
         // databases at least as well as the current ANFIS does.
-        if cand.is_finite() && self.d0_errors(&cand) <= self.d0_errors(&self.anfis) {
-            self.anfis = cand;
+        if cand.is_finite() && self.d0_errors(&cand) <= self.d0_errors(&self.learning.anfis) {
+            self.learning.anfis = cand;
             self.stats.retrains += 1;
         }
     }
@@ -1094,7 +1419,8 @@ impl Detector {
     /// Misclassified D0 samples at the configured threshold.
     fn d0_errors(&self, a: &Anfis) -> usize {
         let th = self.cfg.threshold;
-        self.d0_x.iter().zip(&self.d0_y).filter(|(x, y)| (a.eval(x) >= th) != (**y >= 0.5)).count()
+        let l = &self.learning;
+        l.d0_x.iter().zip(&l.d0_y).filter(|(x, y)| (a.eval(x) >= th) != (**y >= 0.5)).count()
     }
 }
 
@@ -1259,5 +1585,137 @@ mod tests {
         assert_eq!((e.row, e.field), (3, "qy"));
         (s.qw, s.qx, s.qy, s.qz) = (0.3, 0.0, 0.0, 0.0);
         assert_eq!(validate_sample(&s, 0).unwrap_err().field, "qw");
+    }
+
+    /// Clean indicators: every group at R 1, increments 1, no pv.
+    fn clean() -> Indicators {
+        Indicators { r: 1.0, r_group: [1.0; GROUPS], inc_group: [1.0; GROUPS], pv: f64::NAN, ..Indicators::default() }
+    }
+
+    fn evidence(ind: &Indicators) -> Evidence<'_> {
+        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None }
+    }
+
+    #[test]
+    fn the_clock_learns_a_10_hz_period_and_silence_becomes_an_outage_after_1_5_periods() {
+        let mut c = Clock::new();
+        assert_eq!(c.row(0.0, 1.0), (0.0, false));
+        for k in 0..400 {
+            c.fix(0.1 * k as f64);
+        }
+        // From the 0.2 s prior the period converges to 0.1 s, jitter to 0.
+        assert!((c.gps_dt - 0.1).abs() < 1e-6 && c.gps_jitter < 1e-6, "{} {}", c.gps_dt, c.gps_jitter);
+        let lf = 39.9;
+        // 1.5 periods + 20 ms: 0.17 s after the last fix, in flight only.
+        assert!(!c.is_outage(lf + 0.16, false, false, true, None));
+        assert!(c.is_outage(lf + 0.18, false, false, true, None));
+        assert!(!c.is_outage(lf + 0.18, false, false, false, None));
+        assert!(!c.is_outage(lf + 0.18, false, false, true, Some(0.5)));
+        // The receiver's own "no fix" counts after half a period, on the ground too.
+        assert!(!c.is_outage(lf + 0.04, true, false, false, None));
+        assert!(c.is_outage(lf + 0.06, true, false, false, None));
+        // Before any fix nothing is an outage.
+        assert!(!Clock::new().is_outage(100.0, true, true, true, None));
+    }
+
+    #[test]
+    fn a_data_gap_moves_the_last_fix_to_its_end() {
+        let mut c = Clock::new();
+        c.row(10.0, 1.0);
+        c.fix(10.0);
+        assert_eq!(c.row(10.5, 1.0), (0.5, false));
+        assert_eq!(c.last_fix, Some(10.0));
+        assert_eq!(c.row(13.0, 1.0), (2.5, true));
+        assert_eq!(c.last_fix, Some(13.0));
+    }
+
+    #[test]
+    fn gating_withholds_departed_groups_and_the_receiver_takes_its_other_half() {
+        // Velocity departed with the position off its clean level: both go.
+        let mut ind = clean();
+        (ind.r_group[0], ind.r_group[1]) = (1.6, 3.0);
+        let mut w = Withheld::default();
+        w.withhold(&evidence(&ind));
+        assert_eq!(w.groups, [true, true, false]);
+        // Velocity alone with a clean position: the position keeps aiding.
+        ind.r_group[0] = 1.4;
+        let mut w = Withheld::default();
+        w.withhold(&evidence(&ind));
+        assert_eq!(w.groups, [false, true, false]);
+        // Position departed and the receiver incoherent: velocity goes too.
+        let mut ind = clean();
+        ind.r_group[0] = 3.0;
+        let mut w = Withheld::default();
+        w.withhold(&Evidence { incoherence: 4.5, ..evidence(&ind) });
+        assert_eq!(w.groups, [true, true, false]);
+        // Fault memory: a group stays withheld after its R falls back.
+        w.withhold(&evidence(&clean()));
+        assert_eq!(w.groups, [true, true, false]);
+        // The IMU consistency folded into the velocity R does not withhold
+        // the GPS velocity: its own R decides.
+        let mut ind = clean();
+        ind.r_group[1] = 6.0;
+        let mut w = Withheld::default();
+        w.withhold(&Evidence { r_vel: 1.0, ..evidence(&ind) });
+        assert_eq!(w.groups, [false, false, false]);
+        // Another method's failed group is withheld on its word.
+        let dec = Decision { score: 2.0, failed: [false, false, true] };
+        w.withhold(&Evidence { dec: Some(&dec), ..evidence(&clean()) });
+        assert_eq!(w.groups, [false, false, true]);
+    }
+
+    #[test]
+    fn a_withheld_baro_is_released_after_five_consecutive_calm_samples() {
+        let mut w = Withheld::default();
+        assert!(!w.baro_released(0.1), "a baro that is fed is not released");
+        w.groups[2] = true;
+        for cons in [1.0, 1.0, 1.0, 1.0, 2.0, 1.0, 1.0, 1.0, 1.0] {
+            assert!(!w.baro_released(cons));
+        }
+        assert!(w.baro_released(1.0));
+        assert_eq!((w.groups[2], w.baro_calm), (false, 0));
+    }
+
+    #[test]
+    fn an_episode_re_anchors_after_max_coast_or_after_five_calm_epochs() {
+        let ind = clean();
+        // Past maxCoast (20 s): re-anchor, still a fault.
+        let mut e = Episode::default();
+        let mut bad = clean();
+        bad.r_group[0] = 10.0;
+        assert_eq!(e.step(100.0, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(120.5, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: true });
+        // Agreement for 5 epochs (and over 0.5 s): recovered, verdict normal.
+        let mut e = Episode::default();
+        for k in 0..4 {
+            let st = e.step(10.0 + 0.2 * k as f64, true, &evidence(&ind), 20.0, false);
+            assert_eq!(st, EpisodeStep { fault: true, reset: false }, "epoch {k}");
+        }
+        assert_eq!(e.step(10.8, true, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: true });
+        // A position-only episode keeps a large offset as the fault itself.
+        let mut e = Episode::default();
+        let mut step = clean();
+        step.r_group[0] = 4.5;
+        for k in 0..10 {
+            assert!(!e.step(10.0 + 0.2 * k as f64, true, &evidence(&step), 20.0, false).reset);
+        }
+        // An IMU episode, or the trainer's oracle, never recovers that way.
+        let mut e = Episode { imu: true, ..Episode::default() };
+        let mut o = Episode::default();
+        for k in 0..10 {
+            let t = 10.0 + 0.2 * k as f64;
+            assert!(!e.step(t, true, &evidence(&ind), 20.0, false).reset);
+            assert!(!o.step(t, true, &evidence(&ind), 20.0, true).reset);
+        }
+        // A normal verdict releases every group; the receiver counts as lost
+        // until five normal epochs.
+        let mut e = Episode { receiver_lost: true, coast_start: Some(3.0), ..Episode::default() };
+        e.withheld.groups = [true, true, true];
+        for k in 0..5 {
+            assert!(e.receiver_lost, "epoch {k}");
+            assert_eq!(e.step(20.0, false, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: false });
+            assert_eq!((e.withheld.groups, e.coast_start), ([false; GROUPS], None));
+        }
+        assert!(!e.receiver_lost);
     }
 }

@@ -140,11 +140,12 @@ impl Default for Pending {
 /// The filter.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Kf {
-    pub x: StateVec,
+    x: StateVec,
     /// State covariance, current after any innovation or update call (or
     /// [`Kf::flush`]); between predictions and the next measurement it lags.
-    pub P: StateMat,
-    pub noise: FilterNoise,
+    /// Read through the accessors below, which name what they return.
+    P: StateMat,
+    noise: FilterNoise,
     baro_initialised: bool,
     pending: Pending,
     /// Hold the accelerometer-bias estimate: updates leave it (and its
@@ -186,6 +187,35 @@ impl Kf {
 
     pub fn accel_bias(&self) -> Vector3<f64> {
         self.x.fixed_rows::<3>(IB).into_owned()
+    }
+
+    /// The barometer reading the state predicts: altitude up plus the baro
+    /// offset, m.
+    pub fn baro_height(&self) -> f64 {
+        -self.x[IP + 2] + self.x[IBARO]
+    }
+
+    /// Variance of [`Kf::baro_height`], m² (`H P Hᵀ` with `H = [-1 at pD, 1 at
+    /// the offset]`). Like every covariance read, current only after an
+    /// innovation or update call.
+    pub fn baro_height_var(&self) -> f64 {
+        self.P[(IP + 2, IP + 2)] + self.P[(IBARO, IBARO)] - 2.0 * self.P[(IP + 2, IBARO)]
+    }
+
+    /// Variance of position axis `axis` (0..3, NED), m².
+    pub fn position_var(&self, axis: usize) -> f64 {
+        self.P[(IP + axis, IP + axis)]
+    }
+
+    /// Variance of velocity axis `axis` (0..3, NED), (m/s)².
+    pub fn velocity_var(&self, axis: usize) -> f64 {
+        self.P[(IV + axis, IV + axis)]
+    }
+
+    /// The position–velocity block of `P` (position N/E/D then velocity
+    /// N/E/D).
+    pub fn pos_vel_covariance(&self) -> SMatrix<f64, 6, 6> {
+        self.P.fixed_view::<6, 6>(IP, IP).into_owned()
     }
 
     /// Propagate by `dt` s. With `imu`, strapdown mechanisation in NED
@@ -341,10 +371,7 @@ impl Kf {
     pub fn baro_innovation(&mut self, baro: f64) -> Innovation<1> {
         self.flush_or_poison();
         let r = self.noise.baro;
-        Innovation {
-            nu: [baro - (-self.x[IP + 2] + self.x[IBARO])],
-            s: [self.P[(IP + 2, IP + 2)] + self.P[(IBARO, IBARO)] - 2.0 * self.P[(IP + 2, IBARO)] + r * r],
-        }
+        Innovation { nu: [baro - self.baro_height()], s: [self.baro_height_var() + r * r] }
     }
 
     /// GPS position update (m, NED).

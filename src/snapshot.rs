@@ -19,8 +19,10 @@ use crate::detector::Detector;
 /// Format tag at the start of every snapshot.
 pub const FORMAT: &str = "navguard-snapshot";
 /// Bumped whenever the detector's state layout changes; older snapshots are
-/// then refused with a message naming both versions.
-pub const VERSION: u32 = 2;
+/// then refused with a message naming both versions. 3: the detector's
+/// fields grouped into per-stage sub-states (postcard writes fields in
+/// declaration order, so the byte layout moved).
+pub const VERSION: u32 = 3;
 
 #[derive(Serialize, Deserialize)]
 struct Header<'a> {
@@ -163,6 +165,20 @@ mod tests {
         v2.extend_from_slice(body);
         let e = Detector::restore(&v2).unwrap_err();
         assert!(e.contains(&format!("version {}", VERSION + 1)) && e.contains(&format!("reads version {VERSION}")), "{e}");
+        // So is an older one (version 2: the flat layout before the stage
+        // split), before its body is parsed.
+        let older = Header { version: 2, ..h };
+        let mut v_old = postcard::to_allocvec(&older).unwrap();
+        v_old.extend_from_slice(body);
+        let e = Detector::restore(&v_old).unwrap_err();
+        assert_eq!(
+            e,
+            format!(
+                "snapshot: version 2 (written by navguard {}) cannot be read by navguard {}, which reads version 3",
+                env!("CARGO_PKG_VERSION"),
+                env!("CARGO_PKG_VERSION")
+            )
+        );
         // A forged body with a valid checksum: an out-of-range ring head is
         // caught by the shape check, not by a panic on the next push.
         let mut forged = d.clone();
