@@ -6,6 +6,7 @@
 
 pub mod anfis;
 pub mod audit;
+pub mod battery;
 pub mod compare;
 pub mod config;
 pub mod detector;

@@ -273,8 +273,8 @@ fn traj_name(t: Trajectory) -> &'static str {
     }
 }
 
-/// Smooth step from 0 to 1 over [a, b].
-fn smooth(t: f64, a: f64, b: f64) -> f64 {
+/// Smooth step from 0 to 1 over [a, b] (half a cosine).
+pub(crate) fn smooth(t: f64, a: f64, b: f64) -> f64 {
     if t <= a {
         0.0
     } else if t >= b {
@@ -359,7 +359,7 @@ impl Profile {
 }
 
 /// Attitude whose body z axis is along minus the specific force, nose along `yaw`.
-fn thrust_attitude(f_ned: &Vector3<f64>, yaw: f64) -> UnitQuaternion<f64> {
+pub(crate) fn thrust_attitude(f_ned: &Vector3<f64>, yaw: f64) -> UnitQuaternion<f64> {
     let n = f_ned.norm().max(1e-6);
     let zb = -f_ned / n;
     let xc = Vector3::new(libm::cos(yaw), libm::sin(yaw), 0.0);
@@ -372,17 +372,17 @@ fn thrust_attitude(f_ned: &Vector3<f64>, yaw: f64) -> UnitQuaternion<f64> {
 
 /// First-order Gauss–Markov process.
 #[derive(Clone, Copy, Debug)]
-struct GaussMarkov {
+pub(crate) struct GaussMarkov {
     x: f64,
     sigma: f64,
     tau: f64,
 }
 
 impl GaussMarkov {
-    fn new(sigma: f64, tau: f64, rng: &mut Rng) -> Self {
+    pub(crate) fn new(sigma: f64, tau: f64, rng: &mut Rng) -> Self {
         GaussMarkov { x: sigma * rng.normal(), sigma, tau }
     }
-    fn step(&mut self, dt: f64, rng: &mut Rng) -> f64 {
+    pub(crate) fn step(&mut self, dt: f64, rng: &mut Rng) -> f64 {
         let phi = libm::exp(-dt / self.tau);
         self.x = phi * self.x + self.sigma * libm::sqrt(1.0 - phi * phi) * rng.normal();
         self.x
@@ -580,16 +580,24 @@ pub fn simulate(sc: &Scenario) -> Result<Vec<Sample>, String> {
 /// Write rows as navlog CSV with `#` comment lines describing the scenario.
 pub fn to_csv(sc: &Scenario, rows: &[Sample]) -> String {
     use core::fmt::Write;
-    let cols: &[(&str, usize)] = &[
-        ("t", 6), ("lat", 9), ("lon", 9), ("alt", 3), ("vn", 3), ("ve", 3), ("vd", 3), ("fix", 0),
-        ("sats", 0), ("eph", 2), ("epv", 2), ("ax", 4), ("ay", 4), ("az", 4), ("gx", 5), ("gy", 5),
-        ("gz", 5), ("qw", 7), ("qx", 7), ("qy", 7), ("qz", 7), ("baro", 3), ("label", 0),
-    ];
     let mut out = String::with_capacity(rows.len() * 160);
     let _ = writeln!(out, "# navguard simulated scenario \"{}\" (seed {})", sc.name, sc.seed);
     if let Ok(j) = serde_json::to_string(sc) {
         let _ = writeln!(out, "# scenario: {j}");
     }
+    write_rows(&mut out, rows);
+    out
+}
+
+/// The header row and one line per row, at the simulator's precision
+/// (decimals per column; an absent value is an empty cell).
+pub fn write_rows(out: &mut String, rows: &[Sample]) {
+    use core::fmt::Write;
+    let cols: &[(&str, usize)] = &[
+        ("t", 6), ("lat", 9), ("lon", 9), ("alt", 3), ("vn", 3), ("ve", 3), ("vd", 3), ("fix", 0),
+        ("sats", 0), ("eph", 2), ("epv", 2), ("ax", 4), ("ay", 4), ("az", 4), ("gx", 5), ("gy", 5),
+        ("gz", 5), ("qw", 7), ("qx", 7), ("qy", 7), ("qz", 7), ("baro", 3), ("label", 0),
+    ];
     let header: Vec<&str> = cols.iter().map(|c| c.0).collect();
     let _ = writeln!(out, "{}", header.join(","));
     for s in rows {
@@ -605,7 +613,6 @@ pub fn to_csv(sc: &Scenario, rows: &[Sample]) -> String {
         }
         out.push('\n');
     }
-    out
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]

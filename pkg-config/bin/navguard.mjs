@@ -5,7 +5,7 @@
 //   navguard report [--seed N] [--json] [--quick]
 //   navguard train LABELLED.csv [...] --out MODEL.json
 //   navguard compare [--seeds N] [--methods a,b] [--logs DIR] [--json] [--update-readme FILE]
-import { readFileSync, writeFileSync, statSync, readdirSync, openSync, readSync, writeSync, closeSync } from 'node:fs';
+import { readFileSync, statSync, readdirSync, readSync, closeSync } from 'node:fs';
 import { Worker } from 'node:worker_threads';
 import { availableParallelism } from 'node:os';
 import { createRequire } from 'node:module';
@@ -14,6 +14,8 @@ import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
 import { perSampleCsv, perSampleHeader, perSampleRows } from '../lib/csv.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
+import { CliError, AtomicOutput, openInput, readSmall, walkLogs, writeAtomic } from '../lib/files.mjs';
+import { parseArgs, suggest } from '../lib/args.mjs';
 
 const require = createRequire(import.meta.url);
 const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
@@ -31,29 +33,43 @@ function fail(msg, code = 2) {
   process.exit(code);
 }
 
-function parse(argv) {
-  const pos = [], opt = {};
-  for (let i = 0; i < argv.length; i++) {
-    const a = argv[i];
-    if (a.startsWith('--')) {
-      const k = a.slice(2);
-      if (['json', 'quick', 'help'].includes(k)) opt[k] = true;
-      else if (i + 1 < argv.length) opt[k] = argv[++i];
-      else fail(`option ${a} needs a value`);
-    } else pos.push(a);
-  }
-  return { pos, opt };
-}
-
 const progress = (msg) => { if (process.stderr.isTTY) process.stderr.write(`\r\x1b[K${msg}`); };
 const progressDone = () => { if (process.stderr.isTTY) process.stderr.write('\r\x1b[K'); };
 
+/** A config or model file is small: more than this is not one (and a device
+ * such as /dev/zero is refused as not a regular file). */
+const CONFIG_LIMIT = 16 << 20;
+
 function readConfig(path) {
   if (!path) return undefined;
-  try { return JSON.parse(readFileSync(path, 'utf8')); } catch (e) { fail(`--config ${path}: ${e.message}`); }
+  const text = readSmall(path, CONFIG_LIMIT, '--config');
+  try { return JSON.parse(text); } catch (e) { throw new CliError(`--config ${path}: ${e.message}`); }
+}
+
+/** JSON with non-finite numbers as null; a report too large for one string
+ * is an error with exit 2, not a stack trace. */
+function toJson(value, indent) {
+  try {
+    return JSON.stringify(value, (k, v) => (typeof v === 'number' && !Number.isFinite(v) ? null : v), indent);
+  } catch (e) {
+    throw new CliError(`the JSON report cannot be built: ${e.message}`);
+  }
 }
 
 const CHUNK = 4 << 20;
+
+/**
+ * One word for a report: `faults` (at least one interval), `clean`, or
+ * `no verdict` when the log has no GPS fix to judge, so a log the detector
+ * could not judge is never shown as a clean flight.
+ */
+function verdictOf(report) {
+  if (!report.gpsAvailable) return 'no verdict';
+  return report.faults.length > 0 ? 'faults' : 'clean';
+}
+
+/** Exit status under --fail-on-fault: 1 when any audited log has faults. */
+let faultsFound = false;
 
 /** True unless the file starts like a ULog or DataFlash log: navlog CSVs are
  * streamed, the binary formats are read whole. */
@@ -67,68 +83,83 @@ function looksLikeCsv(fd) {
 
 /** A navlog CSV in 4 MiB chunks: memory stays bounded whatever the file's
  * size; the per-sample file is written as the outputs come. */
-function auditCsvStream(file, fd, size, opt, config) {
-  const run = new ng.StreamAuditor(config, Boolean(opt['per-sample']));
-  let out = null;
+function auditCsvStream(file, fd, size, perSample, config) {
+  const run = new ng.StreamAuditor(config, perSample !== null);
   try {
-    if (opt['per-sample']) {
-      out = openSync(opt['per-sample'], 'w');
-      writeSync(out, perSampleHeader());
-    }
+    if (perSample !== null) perSample.write(perSampleHeader());
     const buf = Buffer.alloc(CHUNK);
     for (let pos = 0; ; ) {
       const n = readSync(fd, buf, 0, CHUNK, pos);
       if (n === 0) break;
       pos += n;
       run.feed(buf.subarray(0, n));
-      if (out !== null) writeSync(out, perSampleRows(run.outputs()));
+      if (perSample !== null) perSample.write(perSampleRows(run.outputs()));
       progress(`auditing ${file}: ${(100 * pos / Math.max(1, size)).toFixed(0)}% of ${(size / 1e6).toFixed(1)} MB, ${run.rows()} rows`);
     }
     const res = run.finish();
-    if (out !== null) writeSync(out, perSampleRows(res.columns));
+    if (perSample !== null) perSample.write(perSampleRows(res.columns));
     return res;
   } finally {
-    if (out !== null) closeSync(out);
+    run.free();
+  }
+}
+
+/** A ULog or DataFlash log, read whole and audited in slices so a long
+ * audit shows its progress on a terminal. */
+function auditBinary(file, fd, perSample, config) {
+  const bytes = readFileSync(fd);
+  const run = new ng.Auditor(bytes, config);
+  try {
+    const rows = run.rows();
+    const slice = Math.max(20000, Math.ceil(rows / 100));
+    for (let done = 0; done < 1; ) {
+      done = run.step(slice);
+      progress(`auditing ${file}: ${(100 * done).toFixed(0)}% of ${rows} rows`);
+    }
+    const res = run.finish();
+    if (perSample !== null) perSample.write(perSampleCsv(res.columns));
+    return res;
+  } finally {
     run.free();
   }
 }
 
 function audit(file, opt) {
-  let fd, size;
-  try { fd = openSync(file, 'r'); size = statSync(file).size; } catch (e) { fail(`${file}: ${e.code === 'ENOENT' ? 'no such file' : e.message}`); }
   const config = readConfig(opt.config);
-  progress(`auditing ${file} (${(size / 1e6).toFixed(1)} MB)...`);
-  let res;
+  const { fd, size } = openInput(file);
+  let res, perSample = null;
   try {
-    if (looksLikeCsv(fd)) {
-      res = auditCsvStream(file, fd, size, opt, config);
-    } else {
-      const bytes = readFileSync(fd);
-      // In slices, so a long audit shows its progress on a terminal.
-      const run = new ng.Auditor(bytes, config);
-      const rows = run.rows();
-      const slice = Math.max(20000, Math.ceil(rows / 100));
-      for (let done = 0; done < 1; ) {
-        done = run.step(slice);
-        progress(`auditing ${file}: ${(100 * done).toFixed(0)}% of ${rows} rows`);
-      }
-      res = run.finish();
-      run.free();
-      if (opt['per-sample']) writeFileSync(opt['per-sample'], perSampleCsv(res.columns));
+    // The per-sample file is written beside its target and renamed over it
+    // only once the audit succeeded: an output that names the input (or a
+    // link to it) is refused, and a failed run leaves no half-written file.
+    if (opt['per-sample']) perSample = new AtomicOutput(opt['per-sample'], '--per-sample', [file]);
+    progress(`auditing ${file} (${(size / 1e6).toFixed(1)} MB)...`);
+    try {
+      res = looksLikeCsv(fd) ? auditCsvStream(file, fd, size, perSample, config) : auditBinary(file, fd, perSample, config);
+    } catch (e) {
+      if (e instanceof CliError) throw e;
+      throw new CliError(`${file}: ${e && e.message ? e.message : e}`);
     }
-  } catch (e) { progressDone(); fail(`${file}: ${e.message}`); } finally { closeSync(fd); }
-  progressDone();
+    if (perSample !== null) perSample.commit();
+    perSample = null;
+  } finally {
+    if (perSample !== null) perSample.abort();
+    closeSync(fd);
+    progressDone();
+  }
   const { report } = res;
-  const out = { file, ...report };
+  const verdict = verdictOf(report);
+  if (verdict === 'faults') faultsFound = true;
+  const out = { file, verdict, ...report };
   if (opt.json) {
-    process.stdout.write(JSON.stringify(out, (k, v) => (typeof v === 'number' && !Number.isFinite(v) ? null : v)) + '\n');
+    writeOut(toJson(out) + '\n');
     return;
   }
   const L = [];
-  L.push(`${file}: ${report.format}, ${report.rows} rows, ${report.durationS.toFixed(1)} s`);
+  L.push(`${file}: ${report.format}, ${report.rows} rows, ${report.durationS.toFixed(1)} s: ${verdict}`);
   L.push(`  GPS: ${report.gpsAvailable ? `${report.gpsEpochs} epochs at ${report.gpsRateHz.toFixed(1)} Hz, fix in ${(100 * report.gpsFixFraction).toFixed(1)}% of reports` : 'unavailable'}; IMU ${report.imuRateHz.toFixed(1)} Hz`);
   if (report.missing.length) L.push(`  missing inputs: ${report.missing.join(', ')}`);
-  L.push(`  flagged GPS epochs: ${(100 * report.flaggedGpsEpochFraction).toFixed(2)}%`);
+  L.push(report.gpsAvailable ? `  flagged GPS epochs: ${(100 * report.flaggedGpsEpochFraction).toFixed(2)}%` : '  flagged GPS epochs: none to judge (no GPS fix in the log)');
   L.push(`  fault intervals: ${report.faults.length}`);
   for (const f of report.faults.slice(0, 20)) {
     L.push(`    ${f.start.toFixed(2).padStart(9)} - ${f.end.toFixed(2).padStart(9)} s  ${f.kind.padEnd(10)} peak F ${f.peakF.toFixed(2)}  driver ${f.driver} (${f.indicator})`);
@@ -139,15 +170,18 @@ function audit(file, opt) {
     const m = report.metrics;
     L.push(`  vs labels: accuracy ${m.accuracy.toFixed(4)}, false alarm ${m.falseAlarmRate.toFixed(4)}, misdetection ${m.misdetectionRate.toFixed(4)}, precision ${m.precision.toFixed(4)}, recall ${m.recall.toFixed(4)}, F2 ${m.f2.toFixed(4)}, mean delay ${Number.isFinite(m.meanDetectionDelay) ? m.meanDetectionDelay.toFixed(2) + ' s' : '-'} (TP ${m.tp} FN ${m.fn} FP ${m.fp} TN ${m.tn})`);
   }
-  console.log(L.join('\n'));
+  writeOut(L.join('\n') + '\n');
 }
 
-/** Audit every file in a folder in parallel (worker_threads), one summary. */
+/** Audit every log under a folder (recursively) in parallel
+ * (worker_threads), one summary. */
 async function auditDir(dir, opt) {
-  const files = readdirSync(dir, { withFileTypes: true }).filter((d) => d.isFile()).map((d) => join(dir, d.name)).sort();
-  if (!files.length) fail(`${dir}: no files`);
+  const { logs: files, skipped } = walkLogs(dir);
+  if (!files.length) throw new CliError(`${dir}: no logs found (${skipped.length} other files skipped)`);
   const config = readConfig(opt.config);
-  const jobs = Math.max(1, Math.min(Number(opt.jobs ?? availableParallelism()), files.length));
+  // Checked before the audit starts, so a bad path costs nothing.
+  const summaryOut = opt.summary ? new AtomicOutput(opt.summary, '--summary', files) : null;
+  const jobs = Math.max(1, Math.min(opt.jobs ?? availableParallelism(), files.length));
   const results = [];
   let next = 0, done = 0;
   const t0 = performance.now();
@@ -171,35 +205,26 @@ async function auditDir(dir, opt) {
   });
   progressDone();
   results.sort((a, b) => a.file.localeCompare(b.file));
-  const rows = results.map((r) => r.error ? { file: r.file, error: r.error } : {
-    file: r.file, format: r.report.format, durationS: r.report.durationS, gpsAvailable: r.report.gpsAvailable,
+  const rows = results.map((r) => r.error ? { file: r.file, verdict: 'unreadable', error: r.error } : {
+    file: r.file, verdict: verdictOf(r.report), format: r.report.format, durationS: r.report.durationS, gpsAvailable: r.report.gpsAvailable,
     gpsRateHz: r.report.gpsRateHz, flaggedGpsEpochFraction: r.report.flaggedGpsEpochFraction,
     residualFaults: r.report.faults.filter((f) => f.kind === 'residual').length,
     outages: r.report.faults.filter((f) => f.kind === 'gps_outage').length,
     dataGaps: r.report.dataGaps.length, warnings: r.report.warnings, missing: r.report.missing, ms: r.ms,
   });
-  const summary = { dir, files: files.length, failed: rows.filter((r) => r.error).length, wallMs: performance.now() - t0, jobs, logs: rows };
-  const json = JSON.stringify(summary, (k, v) => (typeof v === 'number' && !Number.isFinite(v) ? null : v), 2);
-  if (opt.summary) writeFileSync(opt.summary, json + '\n');
-  if (opt.json) { console.log(json); return; }
-  console.log(`${dir}: ${files.length} files, ${summary.failed} unreadable, ${jobs} workers, ${(summary.wallMs / 1000).toFixed(2)} s`);
-  console.log('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps');
+  if (rows.some((r) => r.verdict === 'faults')) faultsFound = true;
+  const summary = { dir, files: files.length, failed: rows.filter((r) => r.error).length, skipped, wallMs: performance.now() - t0, jobs, logs: rows };
+  const json = toJson(summary, 2);
+  if (summaryOut !== null) { summaryOut.write(json + '\n'); summaryOut.commit(); }
+  if (opt.json) { writeOut(json + '\n'); return; }
+  const L = [`${dir}: ${files.length} logs, ${summary.failed} unreadable, ${skipped.length} other files skipped, ${jobs} workers, ${(summary.wallMs / 1000).toFixed(2)} s`];
+  L.push('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps  verdict');
   for (const r of rows) {
     const name = r.file.length > 48 ? '...' + r.file.slice(-45) : r.file;
-    if (r.error) { console.log(`  ${name.padEnd(48)}  unreadable: ${r.error}`); continue; }
-    console.log(`  ${name.padEnd(48)}  ${r.format.padEnd(9)} ${r.durationS.toFixed(1).padStart(6)} ${r.gpsAvailable ? r.gpsRateHz.toFixed(1).padStart(6) : '    no'}  ${(100 * r.flaggedGpsEpochFraction).toFixed(2).padStart(6)}%  ${String(r.residualFaults).padStart(5)} ${String(r.outages).padStart(7)} ${String(r.dataGaps).padStart(4)}`);
+    if (r.error) { L.push(`  ${name.padEnd(48)}  unreadable: ${r.error}`); continue; }
+    L.push(`  ${name.padEnd(48)}  ${r.format.padEnd(9)} ${r.durationS.toFixed(1).padStart(6)} ${r.gpsAvailable ? r.gpsRateHz.toFixed(1).padStart(6) : '    no'}  ${r.gpsAvailable ? (100 * r.flaggedGpsEpochFraction).toFixed(2).padStart(6) + '%' : '      -'}  ${String(r.residualFaults).padStart(5)} ${String(r.outages).padStart(7)} ${String(r.dataGaps).padStart(4)}  ${r.verdict}`);
   }
-}
-
-/** Logs under DIR (recursively), sorted, for `compare --logs`. */
-function logFiles(dir) {
-  const out = [];
-  for (const d of readdirSync(dir, { withFileTypes: true })) {
-    const p = join(dir, d.name);
-    if (d.isDirectory()) out.push(...logFiles(p));
-    else if (/\.(csv|ulg|bin|log)$/i.test(d.name)) out.push(p);
-  }
-  return out.sort();
+  writeOut(L.join('\n') + '\n');
 }
 
 const BEGIN = '<!-- compare:begin (generated by `navguard compare`; do not edit) -->';
@@ -208,14 +233,21 @@ const END = '<!-- compare:end -->';
 /** Every method over the battery (and real logs): tables to stdout, or into
  * the README between the compare markers. */
 function compare(opt) {
-  const options = { seeds: Number(opt.seeds ?? 5) };
-  if (opt.methods) options.methods = String(opt.methods).split(',');
+  const options = { seeds: opt.seeds ?? 5 };
+  if (opt.methods) options.methods = opt.methods;
+  // The README is rewritten in place: check it before the long run.
+  const readme = opt['update-readme'];
+  let readmeText = null;
+  if (readme) {
+    readmeText = readSmall(readme, CONFIG_LIMIT, '--update-readme');
+    const a = readmeText.indexOf(BEGIN), b = readmeText.indexOf(END);
+    if (a < 0 || b < a) throw new CliError(`${readme}: no compare markers (${BEGIN} ... ${END})`);
+  }
   let run;
-  try { run = new ng.CompareRun(options); } catch (e) { fail(e.message); }
+  try { run = new ng.CompareRun(options); } catch (e) { throw new CliError(e.message); }
   if (opt.logs) {
-    let files;
-    try { files = logFiles(opt.logs); } catch (e) { fail(`--logs ${opt.logs}: ${e.message}`); }
-    for (const f of files) {
+    const { logs } = walkLogs(opt.logs);
+    for (const f of logs) {
       try { run.addLog(f.slice(opt.logs.length).replace(/^\/+/, ''), readFileSync(f)); } catch (e) { process.stderr.write(`navguard: skipping ${e.message}\n`); }
     }
   }
@@ -227,65 +259,150 @@ function compare(opt) {
       progress(`comparing methods: ${(100 * done).toFixed(0)}%`);
     }
     res = run.finish();
-  } catch (e) { progressDone(); fail(e.message); }
+  } catch (e) { progressDone(); throw new CliError(e.message); }
   progressDone();
   process.stderr.write(`compared in ${((performance.now() - t0) / 1000).toFixed(1)} s\n`);
-  if (opt.json) { console.log(JSON.stringify(res.comparison, (k, v) => (typeof v === 'number' && !Number.isFinite(v) ? null : v))); return; }
-  if (opt['update-readme']) {
-    const path = opt['update-readme'];
-    let text;
-    try { text = readFileSync(path, 'utf8'); } catch (e) { fail(`${path}: ${e.message}`); }
-    const a = text.indexOf(BEGIN), b = text.indexOf(END);
-    if (a < 0 || b < a) fail(`${path}: no compare markers (${BEGIN} ... ${END})`);
-    writeFileSync(path, text.slice(0, a + BEGIN.length) + '\n' + res.markdown + text.slice(b));
-    process.stderr.write(`updated ${path}\n`);
+  if (opt.json) { writeOut(toJson(res.comparison) + '\n'); return; }
+  if (readme) {
+    const a = readmeText.indexOf(BEGIN), b = readmeText.indexOf(END);
+    writeAtomic(readme, readmeText.slice(0, a + BEGIN.length) + '\n' + res.markdown + readmeText.slice(b), '--update-readme');
+    process.stderr.write(`updated ${readme}\n`);
     return;
   }
-  console.log(res.markdown);
+  writeOut(res.markdown + '\n');
 }
 
-function main() {
-  const [cmd, ...rest] = process.argv.slice(2);
-  const { pos, opt } = parse(rest);
+/** Each command's flags (name -> value kind, see lib/args.mjs) and help. */
+const COMMANDS = {
+  audit: {
+    flags: { json: 'bool', 'per-sample': 'path', config: 'path', summary: 'path', jobs: 'count', 'fail-on-fault': 'bool' },
+    help: `navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]
+navguard audit DIR [--json] [--summary OUT.json] [--config CFG.json] [--jobs N]
+
+Audit a flight log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised by
+content) or every log under a folder (recursively, following links).
+  --json             one JSON report on stdout
+  --per-sample FILE  one line per input row: t,status,f,r,c,kind,residuals
+                     (written atomically; never the input file)
+  --config FILE      detector configuration (JSON object)
+  --summary FILE     (DIR) the fleet summary as JSON
+  --jobs N           (DIR) parallel workers (default: the number of cores)
+  --fail-on-fault    exit 1 when a fault interval was found (for scripts)
+Each log gets a verdict: faults, clean, or "no verdict" (no GPS fix to judge).
+Exit status: 0 when the log was read (1 with --fail-on-fault and faults
+found), 2 when it could not be.`,
+  },
+  simulate: {
+    flags: { seed: 'seed', out: 'path' },
+    help: `navguard simulate NAME [--seed N] [--out FILE.csv]
+
+Simulate a built-in scenario into navlog CSV (stdout, or FILE written atomically).
+Names: ${ng.scenarioNames().join(', ')}`,
+  },
+  report: {
+    flags: { seed: 'seed', json: 'bool', quick: 'bool' },
+    help: `navguard report [--seed N] [--json] [--quick]
+
+The paper scenario's TC sweep, the fault kinds and the clean flights.`,
+  },
+  train: {
+    flags: { out: 'path', config: 'path' },
+    help: `navguard train LABELLED.csv [...] --out MODEL.json [--config CFG.json]
+
+Train an ANFIS model from labelled navlog CSV files (--out written atomically).`,
+  },
+  compare: {
+    flags: { seeds: 'count', methods: 'list', logs: 'path', json: 'bool', 'update-readme': 'path' },
+    help: `navguard compare [--seeds N] [--methods a,b,...] [--logs DIR] [--json] [--update-readme README.md]
+
+Every config.method over the seeded battery (and the logs under DIR).`,
+  },
+};
+
+const VERSION = `navguard ${ng.version()}`;
+
+/** stdout that ends quietly when the reader goes away (\`| head\`). */
+function writeOut(text) {
+  process.stdout.write(text);
+}
+process.stdout.on('error', (e) => {
+  if (e.code === 'EPIPE') process.exit(0);
+  process.stderr.write(`navguard: stdout: ${e.message}\n`);
+  process.exit(2);
+});
+
+function run(cmd, pos, opt) {
   switch (cmd) {
-    case 'audit':
-      if (pos.length !== 1) fail(`audit takes one FILE or DIR\n${USAGE}`);
-      try { if (statSync(pos[0]).isDirectory()) return auditDir(pos[0], opt); } catch { /* audit() reports it */ }
+    case 'audit': {
+      if (pos.length !== 1) throw new CliError(`audit takes one FILE or DIR; see 'navguard audit --help'`);
+      let dir = false;
+      try { dir = statSync(pos[0]).isDirectory(); } catch { /* audit() reports it */ }
+      if (dir) return auditDir(pos[0], opt);
+      for (const k of ['summary', 'jobs']) if (k in opt) throw new CliError(`audit: --${k} applies to a folder, and ${pos[0]} is a file`);
       return audit(pos[0], opt);
+    }
     case 'simulate': {
-      if (pos.length !== 1) fail(`simulate takes one scenario NAME\n${USAGE}`);
+      if (pos.length !== 1) throw new CliError(`simulate takes one scenario NAME; see 'navguard simulate --help'`);
       let csv;
-      try { csv = ng.simulate(pos[0], Number(opt.seed ?? 1)); } catch (e) { fail(e.message); }
-      if (opt.out) writeFileSync(opt.out, csv); else process.stdout.write(csv);
+      try { csv = ng.simulate(pos[0], opt.seed ?? 1); } catch (e) { throw new CliError(e.message); }
+      if (opt.out) writeAtomic(opt.out, csv, '--out'); else writeOut(csv);
       return;
     }
     case 'report': {
-      const seed = Number(opt.seed ?? 1);
+      if (pos.length) throw new CliError(`report takes no file; see 'navguard report --help'`);
+      const seed = opt.seed ?? 1;
       const sweep = tcSweep(ng, seed, progress);
       const kinds = opt.quick ? null : faultKinds(ng, [1, 2, 3], progress);
       const clean = opt.quick ? null : cleanFlights(ng, [1, 2, 3], progress);
       progressDone();
-      if (opt.json) console.log(JSON.stringify({ sweep, kinds, clean }));
-      else console.log(formatReport({ sweep, kinds, clean }));
+      writeOut((opt.json ? toJson({ sweep, kinds, clean }) : formatReport({ sweep, kinds, clean })) + '\n');
       return;
     }
     case 'train': {
-      if (!pos.length || !opt.out) fail(`train needs labelled CSV files and --out\n${USAGE}`);
-      const files = pos.map((p) => { try { return new Uint8Array(readFileSync(p)); } catch (e) { fail(`${p}: ${e.message}`); } });
-      let model;
-      try { model = ng.trainFromCsv(files, readConfig(opt.config)); } catch (e) { fail(e.message); }
-      writeFileSync(opt.out, JSON.stringify(model) + '\n');
-      process.stderr.write(`wrote ${opt.out}: ${model.provenance}\n`);
+      if (!pos.length || !opt.out) throw new CliError(`train needs labelled CSV files and --out; see 'navguard train --help'`);
+      const config = readConfig(opt.config);
+      const out = new AtomicOutput(opt.out, '--out', pos);
+      try {
+        const files = pos.map((p) => {
+          const { fd } = openInput(p);
+          try { return new Uint8Array(readFileSync(fd)); } finally { closeSync(fd); }
+        });
+        let model;
+        try { model = ng.trainFromCsv(files, config); } catch (e) { throw new CliError(e.message); }
+        out.write(toJson(model) + '\n');
+        out.commit();
+        process.stderr.write(`wrote ${opt.out}: ${model.provenance}\n`);
+      } catch (e) { out.abort(); throw e; }
       return;
     }
     case 'compare':
+      if (pos.length) throw new CliError(`compare takes no file (use --logs DIR); see 'navguard compare --help'`);
       return compare(opt);
-    case undefined: case 'help': case '--help': case '-h':
-      console.log(USAGE);
-      return;
-    default:
-      fail(`unknown command "${cmd}"\n${USAGE}`);
   }
 }
 
-main();
+async function main() {
+  const [cmd, ...rest] = process.argv.slice(2);
+  if (cmd === undefined || cmd === 'help' || cmd === '--help' || cmd === '-h') {
+    const topic = cmd === 'help' ? rest[0] : undefined;
+    writeOut((topic && Object.hasOwn(COMMANDS, topic) ? COMMANDS[topic].help : USAGE) + '\n');
+    return;
+  }
+  if (cmd === '--version' || cmd === '-V' || cmd === 'version') { writeOut(VERSION + '\n'); return; }
+  if (!Object.hasOwn(COMMANDS, cmd)) {
+    const s = suggest(cmd, Object.keys(COMMANDS));
+    throw new CliError(`unknown command "${cmd}"${s ? ` (did you mean "${s}"?)` : ''}; see 'navguard --help'`);
+  }
+  const { pos, opt } = parseArgs(cmd, rest, { ...COMMANDS[cmd].flags, version: 'bool' });
+  if (opt.help) { writeOut(COMMANDS[cmd].help + '\n'); return; }
+  if (opt.version) { writeOut(VERSION + '\n'); return; }
+  await run(cmd, pos, opt);
+  if (opt['fail-on-fault'] && faultsFound) process.exitCode = 1;
+}
+
+main().catch((e) => {
+  progressDone();
+  if (e instanceof CliError) fail(e.message);
+  // Anything else is a bug, but still one line and exit 2, not a trace.
+  fail(`internal error: ${e && e.message ? e.message : e}`);
+});

@@ -1,0 +1,173 @@
+// File safety for the CLI: an output never overwrites an input, outputs are
+// written atomically, and inputs are regular files of bounded size where the
+// CLI reads them whole. Every failure is a `CliError` (one line, exit 2).
+import { closeSync, fstatSync, openSync, readSync, readdirSync, renameSync, statSync, unlinkSync, writeSync } from 'node:fs';
+import { basename, dirname, join } from 'node:path';
+
+/** An error the CLI reports as one line on stderr with exit code 2. */
+export class CliError extends Error {}
+
+function describe(e) {
+  if (e && e.code === 'ENOENT') return 'no such file or directory';
+  if (e && e.code === 'EACCES') return 'permission denied';
+  if (e && e.code === 'EISDIR') return 'is a directory';
+  return e && e.message ? e.message : String(e);
+}
+
+/** `statSync` (following symlinks) or null when the path does not exist. */
+function statOrNull(path) {
+  try { return statSync(path); } catch (e) { if (e.code === 'ENOENT') return null; throw new CliError(`${path}: ${describe(e)}`); }
+}
+
+/** True when a and b are the same file: same device and inode, symlinks and
+ * hard links included. */
+export function sameFile(a, b) {
+  return a !== null && b !== null && a.dev === b.dev && a.ino === b.ino;
+}
+
+/**
+ * Refuse an output path that is (or resolves to) one of the inputs. `what`
+ * names the flag in the message, e.g. `--per-sample`.
+ */
+export function refuseOverwrite(what, out, inputs) {
+  const o = statOrNull(out);
+  if (o === null) return;
+  if (o.isDirectory()) throw new CliError(`${what} ${out}: is a directory`);
+  for (const input of inputs) {
+    if (sameFile(o, statOrNull(input))) throw new CliError(`${what} ${out}: is the input ${input}; refusing to overwrite it`);
+  }
+}
+
+/**
+ * Open an input that the CLI will read: it must exist and be a regular file
+ * (a FIFO with no writer would block for ever, a device never ends). Returns
+ * `{ fd, size }`. The file is opened first and checked through the open
+ * descriptor, so a swap between check and read cannot slip a FIFO in.
+ */
+export function openInput(path) {
+  let st = statOrNull(path);
+  if (st === null) throw new CliError(`${path}: no such file`);
+  if (!st.isFile()) throw new CliError(`${path}: not a regular file (${kindOf(st)})`);
+  let fd;
+  try { fd = openSync(path, 'r'); } catch (e) { throw new CliError(`${path}: ${describe(e)}`); }
+  st = fstatSync(fd);
+  if (!st.isFile()) { closeSync(fd); throw new CliError(`${path}: not a regular file (${kindOf(st)})`); }
+  return { fd, size: st.size };
+}
+
+function kindOf(st) {
+  if (st.isDirectory()) return 'a directory';
+  if (st.isFIFO()) return 'a FIFO';
+  if (st.isCharacterDevice() || st.isBlockDevice()) return 'a device';
+  if (st.isSocket()) return 'a socket';
+  return 'not a file';
+}
+
+/** Read a whole small input (a config, a model), refusing more than `limit` bytes. */
+export function readSmall(path, limit, what) {
+  const { fd, size } = openInput(path);
+  try {
+    if (size > limit) throw new CliError(`${what} ${path}: ${size} bytes, more than the ${limit}-byte limit`);
+    const buf = Buffer.alloc(size);
+    let n = 0;
+    while (n < size) {
+      const k = readSync(fd, buf, n, size - n, n);
+      if (k === 0) break;
+      n += k;
+    }
+    return buf.subarray(0, n).toString('utf8');
+  } finally { closeSync(fd); }
+}
+
+let serial = 0;
+
+/**
+ * An output written atomically: the data goes to a temporary file beside the
+ * target, which replaces the target by `rename` only on `commit()`. Until
+ * then the target is untouched, so an interrupted or failed run leaves the
+ * previous file (or none). `abort()` removes the temporary file.
+ */
+export class AtomicOutput {
+  constructor(path, what, inputs = []) {
+    refuseOverwrite(what, path, inputs);
+    this.path = path;
+    this.what = what;
+    this.tmp = join(dirname(path), `.${basename(path)}.navguard-${process.pid}-${serial++}.tmp`);
+    try { this.fd = openSync(this.tmp, 'wx'); } catch (e) { throw new CliError(`${what} ${path}: ${describe(e)}`); }
+  }
+
+  write(text) {
+    try { writeSync(this.fd, text); } catch (e) { this.abort(); throw new CliError(`${this.what} ${this.path}: ${describe(e)}`); }
+  }
+
+  commit() {
+    try {
+      closeSync(this.fd);
+      this.fd = null;
+      renameSync(this.tmp, this.path);
+    } catch (e) { this.abort(); throw new CliError(`${this.what} ${this.path}: ${describe(e)}`); }
+  }
+
+  abort() {
+    if (this.fd !== null) { try { closeSync(this.fd); } catch { /* already closed */ } this.fd = null; }
+    try { unlinkSync(this.tmp); } catch { /* never created or already renamed */ }
+  }
+}
+
+/** Write `text` to `path` atomically, refusing to overwrite any of `inputs`. */
+export function writeAtomic(path, text, what, inputs = []) {
+  const out = new AtomicOutput(path, what, inputs);
+  out.write(text);
+  out.commit();
+}
+
+/** The first bytes of a file look like a log navguard reads: a ULog or
+ * DataFlash header, or a navlog CSV whose header (after `#` comments) has a
+ * `t` column. */
+export function sniffLog(path) {
+  let fd;
+  try { fd = openSync(path, 'r'); } catch { return false; }
+  try {
+    const head = Buffer.alloc(4096);
+    const n = readSync(fd, head, 0, head.length, 0);
+    if (n >= 7 && head.subarray(0, 7).equals(Buffer.from([0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35]))) return true;
+    if (n >= 3 && head[0] === 0xa3 && head[1] === 0x95) return true;
+    const text = head.subarray(0, n).toString('utf8');
+    const header = text.split(/\r?\n/).find((l) => l.trim() !== '' && !l.startsWith('#'));
+    return header !== undefined && header.split(',').map((c) => c.trim().toLowerCase()).includes('t');
+  } finally { closeSync(fd); }
+}
+
+/**
+ * Every log under `dir`, recursively, following symbolic links (each file
+ * or folder once, by device and inode, so a link loop ends). Returns
+ * `{ logs, skipped }`: `skipped` lists what was passed over and why (not a
+ * regular file, not a log, a broken link).
+ */
+export function walkLogs(dir) {
+  const logs = [], skipped = [], seen = new Map();
+  const visit = (path, depth) => {
+    let st;
+    try { st = statSync(path); } catch (e) { skipped.push({ file: path, why: describe(e) }); return; }
+    const id = `${st.dev}:${st.ino}`;
+    if (seen.has(id)) {
+      if (!st.isDirectory()) skipped.push({ file: path, why: `the same file as ${seen.get(id)}` });
+      return;
+    }
+    seen.set(id, path);
+    if (st.isDirectory()) {
+      if (depth > 32) { skipped.push({ file: path, why: 'deeper than 32 folders' }); return; }
+      let names;
+      try { names = readdirSync(path).sort(); } catch (e) { skipped.push({ file: path, why: describe(e) }); return; }
+      for (const name of names) visit(join(path, name), depth + 1);
+    } else if (!st.isFile()) {
+      skipped.push({ file: path, why: `not a regular file (${kindOf(st)})` });
+    } else if (!sniffLog(path)) {
+      skipped.push({ file: path, why: 'not a log (no ULog, DataFlash or navlog CSV header)' });
+    } else {
+      logs.push(path);
+    }
+  };
+  visit(dir, 0);
+  return { logs, skipped };
+}
