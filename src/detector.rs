@@ -296,6 +296,21 @@ const IMU_ARM_WINDOWS: u32 = 50;
 /// about 3σ in that second.
 const IMU_RECENT_S: f64 = 1.0;
 const IMU_CALM: f64 = 1.0;
+/// s: the shortest silence of the receiver read as an outage (see
+/// `Clock::is_outage`).
+const SILENT_OUTAGE_S: f64 = 1.5;
+/// s: the longest a position-only episode (the GPS velocity still aiding
+/// the estimate) is judged before the estimate re-anchors on the GPS. Its
+/// reference, the GPS velocity integrated, drifts slowly, so it can judge a
+/// persisting step far longer than an IMU-only coast (`maxCoast`).
+const POSITION_COAST_S: f64 = 120.0;
+/// A return jump must undo an offset of at least this many σ_Δ...
+const RETURN_MIN_SIGMAS: f64 = 6.0;
+/// ...and, along the offset's direction, between these shares of it (a
+/// return to where the GPS was before, up to the coast's drift).
+const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
+/// s: time constant of the learnt accelerometer noise.
+const IMU_PSD_TAU: f64 = 2.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
@@ -333,6 +348,7 @@ pub struct Detector {
     imu: Option<(f64, ImuInput)>,
     ind: IndicatorEngine,
     clock: Clock,
+    imu_noise: ImuNoise,
     last_est: LastEstimate,
     consistency: Consistency,
     episode: Episode,
@@ -411,8 +427,13 @@ impl Clock {
 
     /// Outage at a row without a fix at `t` s: after a fix has been seen,
     /// the receiver says it has none (`reports_no_fix`), or (`flying`) no
-    /// fix arrived within `timeout` s (by default 1.5 periods, or more for a
-    /// jittery receiver: a late fix is not an outage). It lasts
+    /// fix arrived within `timeout` s. By default silence must outlast
+    /// `SILENT_OUTAGE_S` and 3 receiver periods (more for a jittery
+    /// receiver): loggers drop GPS records for up to about a second while
+    /// the receiver keeps its fix (78 such gaps of 0.5–0.94 s on the shared
+    /// ArduPilot logs, the receiver's own clock advancing across each),
+    /// whereas a receiver that loses its fix says so (a no-fix record
+    /// 1.2 s after the last fix in all 9 real losses there). It lasts
     /// (`in_outage`) until the next fix. A receiver that reports losing its
     /// fix is an outage on the ground too; mere silence counts only in
     /// flight (logs often stop sending GPS after landing).
@@ -426,8 +447,35 @@ impl Clock {
         if reports_no_fix && t - lf > 0.5 * self.gps_dt {
             return true;
         }
-        let auto = (1.5 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
+        let auto = SILENT_OUTAGE_S.max(3.0 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
         flying && t - lf > timeout.unwrap_or(auto)
+    }
+}
+
+/// The accelerometer noise learnt in flight: half the mean square of
+/// consecutive differences per axis times the sample interval, an
+/// exponential mean over `IMU_PSD_TAU` s: a density ((m/s²)²·s), the same
+/// at any IMU rate for the same sensor, that grows with vibration and with
+/// snapshot sampling. The filter adds it to its process noise.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct ImuNoise {
+    /// Previous sample (t s, specific force m/s²).
+    prev: Option<(f64, [f64; 3])>,
+    psd: f64,
+}
+
+impl ImuNoise {
+    /// One IMU sample at `t` s; returns the density.
+    fn learn(&mut self, t: f64, f: [f64; 3]) -> f64 {
+        if let Some((tp, fp)) = self.prev {
+            let dt = t - tp;
+            if dt > 0.0 && dt < 0.5 {
+                let ms = (0..3).map(|a| (f[a] - fp[a]).powi(2)).sum::<f64>() / 6.0;
+                self.psd += (dt / IMU_PSD_TAU).min(1.0) * (ms * dt - self.psd);
+            }
+        }
+        self.prev = Some((t, f));
+        self.psd
     }
 }
 
@@ -453,6 +501,8 @@ struct Residuals {
     /// Each GPS axis' previous residual, for `IndicatorEngine::accept` once
     /// the axis is fed to the filter.
     prev_r: [f64; 6],
+    /// Position reference residuals (the last accepted epoch's), m.
+    r_ref: [f64; 3],
 }
 
 impl Residuals {
@@ -472,6 +522,7 @@ impl LastEstimate {
     fn residuals(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix) -> Residuals {
         let pin = kf.position_innovation(&fix.y);
         let pos_prior = kf.position();
+        let r_ref = core::array::from_fn(|a| ind.reference(a));
         let mut prev_r = [0.0; 6];
         for a in 0..3 {
             prev_r[a] = ind.previous(a);
@@ -486,7 +537,7 @@ impl LastEstimate {
             }
             vin
         });
-        Residuals { pin, vin, prev_r }
+        Residuals { pin, vin, prev_r, r_ref }
     }
 
     /// The filter's estimate after a GPS epoch's update (or re-anchoring).
@@ -516,11 +567,91 @@ struct Consistency {
     /// Previous GPS fix (t s, position NED m, velocity m/s) for the
     /// position–velocity test.
     last_gps: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    /// Latest baro sample (t s, altitude m) for the baro–GPS test.
+    last_baro: Option<(f64, f64)>,
+    /// The boot clock's rate against true time.
+    rate: ClockRate,
+}
+
+/// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
+/// clock that runs 0.92× true time (the shared 2014 ArduPilot logs:
+/// 0.9229–0.9235 by the receiver's own time of week). Timestamps from it
+/// make the GPS position move faster than its velocity integrated over the
+/// stamps, by 8% of the speed: a ramp in every flight. The GPS itself says
+/// how fast the clock runs: over blocks of at least `CLOCK_BLOCK_S`, its
+/// horizontal displacement against its velocity integrated over boot time,
+/// regressed through the origin: `scale = Σ ΔP·ΔV / Σ |ΔV|²`. It is used
+/// once `Σ |ΔV|²` reaches `CLOCK_MIN_SXX` (about 70 m flown), clamped to
+/// `CLOCK_RANGE`, and multiplies every time step of the filter and of the
+/// position–velocity test. A clock error always points along the velocity;
+/// a position fault does not and averages out over headings, so blocks in
+/// a position-only episode still count; blocks with the receiver's
+/// velocity withheld do not.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct ClockRate {
+    /// True seconds per boot-clock second.
+    scale: f64,
+    sxy: f64,
+    sxx: f64,
+    /// Block start: boot time (s) and horizontal GPS position (m).
+    start: Option<(f64, [f64; 2])>,
+    /// Horizontal GPS velocity integrated since the block start, m.
+    dv: [f64; 2],
+    /// Boot time of the last epoch observed, s.
+    last: Option<f64>,
+}
+
+const CLOCK_BLOCK_S: f64 = 5.0;
+const CLOCK_MIN_SXX: f64 = 5.0e3;
+/// m: a block must span at least this much flight to count.
+const CLOCK_MIN_BLOCK_M: f64 = 10.0;
+const CLOCK_RANGE: (f64, f64) = (0.9, 1.15);
+
+impl ClockRate {
+    fn new() -> Self {
+        ClockRate { scale: 1.0, sxy: 0.0, sxx: 0.0, start: None, dv: [0.0; 2], last: None }
+    }
+
+    /// One GPS interval: the previous epoch (boot time `pt` s, position
+    /// `pp` m, velocity `pv` m/s, NED) to this one (`t`, `y`, `v`).
+    fn observe(&mut self, (pt, pp, pv): (f64, Vector3<f64>, Vector3<f64>), t: f64, y: &Vector3<f64>, v: &Vector3<f64>) {
+        // A broken chain (skipped epochs) restarts the block.
+        if self.last != Some(pt) || self.start.is_none() {
+            self.start = Some((pt, [pp[0], pp[1]]));
+            self.dv = [0.0; 2];
+        }
+        self.last = Some(t);
+        for a in 0..2 {
+            self.dv[a] += 0.5 * (v[a] + pv[a]) * (t - pt);
+        }
+        let Some((t0, p0)) = self.start else { return };
+        if t - t0 < CLOCK_BLOCK_S {
+            return;
+        }
+        let vv = self.dv[0] * self.dv[0] + self.dv[1] * self.dv[1];
+        if vv > CLOCK_MIN_BLOCK_M * CLOCK_MIN_BLOCK_M {
+            self.sxy += (y[0] - p0[0]) * self.dv[0] + (y[1] - p0[1]) * self.dv[1];
+            self.sxx += vv;
+            if self.sxx >= CLOCK_MIN_SXX {
+                self.scale = (self.sxy / self.sxx).clamp(CLOCK_RANGE.0, CLOCK_RANGE.1);
+            }
+        }
+        self.start = Some((t, [y[0], y[1]]));
+        self.dv = [0.0; 2];
+    }
 }
 
 impl Consistency {
     fn new() -> Self {
-        Consistency { alt_int: 0.0, dv_imu: Vector3::zeros(), imu_gap: true, flight_time: 0.0, last_gps: None }
+        Consistency {
+            alt_int: 0.0,
+            dv_imu: Vector3::zeros(),
+            imu_gap: true,
+            flight_time: 0.0,
+            last_gps: None,
+            last_baro: None,
+            rate: ClockRate::new(),
+        }
     }
 
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
@@ -537,10 +668,13 @@ impl Consistency {
         }
     }
 
-    /// The tests stage: feed the fix to the position–velocity and IMU
-    /// consistency tests, decide whether the IMU test joins R, and close the
-    /// epoch's indicators. `vel_withheld`: the GPS velocity is withheld.
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool) -> Indicators {
+    /// The tests stage: feed the fix to the position–velocity, baro–GPS and
+    /// IMU consistency tests, decide whether the IMU test joins R, and close
+    /// the epoch's indicators. `vel_withheld`: the GPS velocity is withheld;
+    /// `position_episode`: a position fault is being judged with the GPS
+    /// velocity still trusted, so the position–velocity sum is held.
+    /// `learn_rate`: the receiver is trusted enough to teach the clock rate.
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, position_episode: bool, learn_rate: bool) -> Indicators {
         let (t, y) = (fix.t, fix.y);
         // Position–velocity consistency: the GPS's own position change
         // against the trapezoid of its velocities (filter-independent).
@@ -549,13 +683,21 @@ impl Consistency {
         // bias and hold the test up after it clears.
         match (&fix.vel, self.last_gps) {
             (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
-                let dtg = t - pt;
+                if learn_rate {
+                    self.rate.observe((pt, pp, pv), t, &y, v);
+                }
+                let dtg = (t - pt) * self.rate.scale;
                 let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
+                ind.hold_pv(position_episode);
                 ind.observe_pv(u, !vel_withheld);
             }
             _ => ind.clear_pv(),
         }
         self.last_gps = fix.vel.map(|v| (t, y, v));
+        // Baro against the GPS altitude (up), with the latest baro sample.
+        if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
+            ind.observe_baro_gps(t, b + y[2]);
+        }
         // IMU consistency: GPS horizontal velocity against the filter's
         // IMU-predicted velocity changes, only while every prediction since
         // the last epoch ran on the IMU.
@@ -683,6 +825,10 @@ struct Evidence<'a> {
     incoherence: f64,
     /// The other method's decision; None for the ANFIS.
     dec: Option<&'a Decision>,
+    /// This epoch's residuals (for the episode's ends).
+    res: &'a Residuals,
+    /// Learnt σ_Δ of the position axes, m.
+    sigma_pos: [f64; 3],
 }
 
 impl Evidence<'_> {
@@ -897,14 +1043,47 @@ impl Episode {
             return EpisodeStep { fault: false, reset: false };
         }
         let start = *self.coast_start.get_or_insert(t);
-        let coasted_out = t - start > max_coast;
         self.withheld.withhold(ev);
         self.normal_run = 0;
         if self.withheld.gps_vel() {
             self.receiver_lost = true;
         }
-        let recovered = self.recovered(t - start, ev, oracle);
-        EpisodeStep { fault: !recovered, reset: coasted_out || recovered }
+        let coasted_out = t - start > self.coast_limit(max_coast);
+        let ended = !oracle && (self.recovered(t - start, ev, oracle) || self.returned(ev));
+        EpisodeStep { fault: !ended, reset: coasted_out || ended }
+    }
+
+    /// How long the episode may coast, s: an IMU-only coast (the whole
+    /// receiver withheld) `max_coast`; a position-only one, judged against
+    /// the GPS velocity integrated, `POSITION_COAST_S`.
+    fn coast_limit(&self, max_coast: f64) -> f64 {
+        if self.receiver_lost {
+            max_coast
+        } else {
+            max_coast.max(POSITION_COAST_S)
+        }
+    }
+
+    /// A return jump ends a position-only episode: in one epoch the GPS
+    /// position came back to where the last accepted epoch had it, undoing
+    /// most of the offset along its direction (projecting ignores the
+    /// estimate's drift across it, such as its height while a horizontal
+    /// step is withheld). The GPS is the truth again: re-anchor on it
+    /// rather than read the estimate's coast drift as a new fault.
+    fn returned(&self, ev: &Evidence) -> bool {
+        if !self.withheld.gps_pos() || self.receiver_lost || self.imu {
+            return false;
+        }
+        let res = ev.res;
+        let off: [f64; 3] = core::array::from_fn(|a| res.prev_r[a] - res.r_ref[a]);
+        let jump: [f64; 3] = core::array::from_fn(|a| res.pin.nu[a] - res.prev_r[a]);
+        let off2: f64 = off.iter().map(|x| x * x).sum();
+        let sigma2: f64 = ev.sigma_pos.iter().map(|x| x * x).sum();
+        if !(off2 > RETURN_MIN_SIGMAS * RETURN_MIN_SIGMAS * sigma2) {
+            return false;
+        }
+        let undone = -(0..3).map(|a| jump[a] * off[a]).sum::<f64>() / off2;
+        (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone)
     }
 
     /// Whether the episode, `elapsed` s old, is over and the filter should
@@ -1027,6 +1206,7 @@ impl Detector {
             imu: None,
             ind: IndicatorEngine::new(cfg.indicator_settings()),
             clock: Clock::new(),
+            imu_noise: ImuNoise::default(),
             last_est: LastEstimate { pos: Vector3::zeros(), vel: Vector3::zeros(), baro_h: None },
             consistency: Consistency::new(),
             episode: Episode::default(),
@@ -1170,6 +1350,7 @@ impl Detector {
         }
         self.hold_imu(t, s);
         if s.has_baro() {
+            self.consistency.last_baro = Some((t, s.baro));
             self.stats.baro_rows += 1;
             self.baro_row(t, s.baro);
         }
@@ -1192,10 +1373,12 @@ impl Detector {
         self.episode.withheld.release();
     }
 
-    /// Predict the filter by `dt` s to `t`, on the held IMU if it is recent.
+    /// Predict the filter by `dt` boot-clock s to `t`, on the held IMU if
+    /// it is recent; the step is taken in true time (see `ClockRate`).
     fn predict(&mut self, t: f64, dt: f64) {
         let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
         let Some(kf) = self.kf.as_mut() else { return };
+        let dt = dt * self.consistency.rate.scale;
         let v0 = kf.velocity();
         match kf.predict(dt, imu.as_ref()) {
             Ok(()) => self.consistency.advance(dt, v0, kf.velocity(), kf_flying(kf), imu.is_some()),
@@ -1209,6 +1392,10 @@ impl Detector {
             if let Some(q) = quat_from_wxyz(s.qw, s.qx, s.qy, s.qz) {
                 self.imu = Some((t, ImuInput { f_body: Vector3::new(s.ax, s.ay, s.az), q }));
                 self.stats.imu_rows += 1;
+                let psd = self.imu_noise.learn(t, [s.ax, s.ay, s.az]);
+                if let Some(kf) = self.kf.as_mut() {
+                    kf.set_accel_psd(psd);
+                }
             }
         }
     }
@@ -1292,7 +1479,9 @@ impl Detector {
         let noise = self.cfg.filter_noise();
         let v0 = fix.vel.unwrap_or_else(Vector3::zeros);
         let vs = if fix.vel.is_some() { noise.gps_vel } else { 3.0 };
-        self.kf = Some(Kf::new(noise, fix.y, v0, noise.gps_pos_h, vs));
+        let mut kf = Kf::new(noise, fix.y, v0, noise.gps_pos_h, vs);
+        kf.set_accel_psd(self.imu_noise.psd);
+        self.kf = Some(kf);
         self.last_est.pos = fix.y;
         self.last_est.vel = v0;
         self.ind.reset_references();
@@ -1317,7 +1506,10 @@ impl Detector {
         };
         let res = self.last_est.residuals(kf, &mut self.ind, &fix);
         res.write(&mut self.resid);
-        let ind = self.consistency.tests(&mut self.ind, &fix, self.episode.withheld.gps_vel());
+        let position_episode = self.episode.active && !self.episode.imu && !self.episode.withheld.gps_vel();
+        let vel_withheld = self.episode.withheld.gps_vel();
+        let learn_rate = !self.episode.active && !self.episode.receiver_lost;
+        let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, position_episode, learn_rate);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -1330,6 +1522,8 @@ impl Detector {
             r_vel: self.ind.r_vel_unfolded(),
             incoherence: self.ind.incoherence(),
             dec: verdict.dec.as_ref(),
+            res: &res,
+            sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
         };
         let step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         let fed = if step.reset {
@@ -1383,6 +1577,7 @@ impl Detector {
         } else {
             self.methods.learn_normal(self.cfg.method, v.dr);
             self.ind.accept_pv();
+            self.ind.accept_baro_gps();
             if self.flying() {
                 self.ind.accept_imu();
             }
