@@ -606,6 +606,10 @@ const CLOCK_MIN_SXX: f64 = 5.0e3;
 /// m: a block must span at least this much flight to count.
 const CLOCK_MIN_BLOCK_M: f64 = 10.0;
 const CLOCK_RANGE: (f64, f64) = (0.9, 1.15);
+/// Rate errors below 1% are left alone: the clocks this corrects are off by
+/// several percent (8% on the 2014 ArduPilot builds), while the estimate
+/// itself wanders by a fraction of a percent.
+const CLOCK_DEAD_BAND: f64 = 0.01;
 
 impl ClockRate {
     fn new() -> Self {
@@ -633,7 +637,10 @@ impl ClockRate {
             self.sxy += (y[0] - p0[0]) * self.dv[0] + (y[1] - p0[1]) * self.dv[1];
             self.sxx += vv;
             if self.sxx >= CLOCK_MIN_SXX {
-                self.scale = (self.sxy / self.sxx).clamp(CLOCK_RANGE.0, CLOCK_RANGE.1);
+                let k = (self.sxy / self.sxx).clamp(CLOCK_RANGE.0, CLOCK_RANGE.1);
+                // Within the dead band the estimate is GPS noise, not a
+                // clock: correcting by it would only add its error.
+                self.scale = if (k - 1.0).abs() < CLOCK_DEAD_BAND { 1.0 } else { k };
             }
         }
         self.start = Some((t, [y[0], y[1]]));
@@ -1788,11 +1795,18 @@ mod tests {
     }
 
     fn evidence(ind: &Indicators) -> Evidence<'_> {
-        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None }
+        // Residuals that sit on their references: no return jump.
+        let res: &'static Residuals = Box::leak(Box::new(Residuals {
+            pin: Innovation::default(),
+            vin: None,
+            prev_r: [0.0; 6],
+            r_ref: [0.0; 3],
+        }));
+        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None, res, sigma_pos: [0.1; 3] }
     }
 
     #[test]
-    fn the_clock_learns_a_10_hz_period_and_silence_becomes_an_outage_after_1_5_periods() {
+    fn the_clock_learns_a_10_hz_period_and_silence_becomes_an_outage_after_1_5_s() {
         let mut c = Clock::new();
         assert_eq!(c.row(0.0, 1.0), (0.0, false));
         for k in 0..400 {
@@ -1801,11 +1815,21 @@ mod tests {
         // From the 0.2 s prior the period converges to 0.1 s, jitter to 0.
         assert!((c.gps_dt - 0.1).abs() < 1e-6 && c.gps_jitter < 1e-6, "{} {}", c.gps_dt, c.gps_jitter);
         let lf = 39.9;
-        // 1.5 periods + 20 ms: 0.17 s after the last fix, in flight only.
-        assert!(!c.is_outage(lf + 0.16, false, false, true, None));
-        assert!(c.is_outage(lf + 0.18, false, false, true, None));
-        assert!(!c.is_outage(lf + 0.18, false, false, false, None));
-        assert!(!c.is_outage(lf + 0.18, false, false, true, Some(0.5)));
+        // Silence: 1.5 s + 20 ms after the last fix (a logger's dropped
+        // records last up to about a second), in flight only.
+        assert!(!c.is_outage(lf + 1.0, false, false, true, None));
+        assert!(!c.is_outage(lf + 1.51, false, false, true, None));
+        assert!(c.is_outage(lf + 1.53, false, false, true, None));
+        assert!(!c.is_outage(lf + 1.53, false, false, false, None));
+        assert!(!c.is_outage(lf + 1.53, false, false, true, Some(2.0)));
+        assert!(c.is_outage(lf + 0.18, false, false, true, Some(0.17)));
+        // A 1 Hz receiver: 3 periods.
+        let mut slow = Clock::new();
+        for k in 0..400 {
+            slow.fix(k as f64);
+        }
+        assert!(!slow.is_outage(399.0 + 2.9, false, false, true, None));
+        assert!(slow.is_outage(399.0 + 3.1, false, false, true, None));
         // The receiver's own "no fix" counts after half a period, on the ground too.
         assert!(!c.is_outage(lf + 0.04, true, false, false, None));
         assert!(c.is_outage(lf + 0.06, true, false, false, None));
@@ -1872,14 +1896,23 @@ mod tests {
     }
 
     #[test]
-    fn an_episode_re_anchors_after_max_coast_or_after_five_calm_epochs() {
+    fn an_episode_re_anchors_after_its_coast_limit_or_after_five_calm_epochs() {
         let ind = clean();
-        // Past maxCoast (20 s): re-anchor, still a fault.
+        // The whole receiver withheld (an IMU-only coast), past maxCoast
+        // (20 s): re-anchor, still a fault.
         let mut e = Episode::default();
         let mut bad = clean();
         bad.r_group[0] = 10.0;
+        bad.r_group[1] = 10.0;
         assert_eq!(e.step(100.0, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: false });
         assert_eq!(e.step(120.5, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: true });
+        // Position only (the GPS velocity still aiding): judged for 120 s.
+        let mut e = Episode::default();
+        let mut pos = clean();
+        pos.r_group[0] = 10.0;
+        assert_eq!(e.step(100.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(219.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(220.5, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: true });
         // Agreement for 5 epochs (and over 0.5 s): recovered, verdict normal.
         let mut e = Episode::default();
         for k in 0..4 {
@@ -1912,5 +1945,99 @@ mod tests {
             assert_eq!((e.withheld.groups, e.coast_start), ([false; GROUPS], None));
         }
         assert!(!e.receiver_lost);
+    }
+
+    /// Residuals of an epoch whose previous position residual was `prev`,
+    /// the reference `r_ref`, and this one `now` (m).
+    fn residuals(r_ref: [f64; 3], prev: [f64; 3], now: [f64; 3]) -> &'static Residuals {
+        let mut pin = Innovation::default();
+        pin.nu = now;
+        let mut prev_r = [0.0; 6];
+        prev_r[..3].copy_from_slice(&prev);
+        Box::leak(Box::new(Residuals { pin, vin: None, prev_r, r_ref }))
+    }
+
+    #[test]
+    fn a_return_jump_that_undoes_the_offset_ends_a_position_episode() {
+        let mut pos = clean();
+        pos.r_group[0] = 10.0;
+        let open = |e: &mut Episode| e.step(100.0, true, &evidence(&pos), 20.0, false);
+        // A 10 m step north held, then the GPS back to within 1 m (the
+        // estimate's drift across the offset, here 2 m down, does not count).
+        let mut e = Episode::default();
+        open(&mut e);
+        let back = Evidence { res: residuals([0.0; 3], [10.0, 0.0, 0.0], [0.8, 0.3, 2.0]), ..evidence(&pos) };
+        assert_eq!(e.step(160.0, true, &back, 20.0, false), EpisodeStep { fault: false, reset: true });
+        // A jump that undoes a third of it, or overshoots to the other side
+        // by as much, is no return.
+        for now in [[6.7, 0.0, 0.0], [-6.0, 0.0, 0.0]] {
+            let mut e = Episode::default();
+            open(&mut e);
+            let ev = Evidence { res: residuals([0.0; 3], [10.0, 0.0, 0.0], now), ..evidence(&pos) };
+            assert_eq!(e.step(160.0, true, &ev, 20.0, false), EpisodeStep { fault: true, reset: false }, "{now:?}");
+        }
+        // An offset within 6 σ_Δ of the reference is noise, not a step to undo.
+        let mut e = Episode::default();
+        open(&mut e);
+        let small = Evidence { res: residuals([0.0; 3], [0.5, 0.0, 0.0], [0.0; 3]), ..evidence(&pos) };
+        assert_eq!(e.step(160.0, true, &small, 20.0, false), EpisodeStep { fault: true, reset: false });
+        // An IMU-only coast (receiver withheld) does not end on a jump: its
+        // offset is the IMU's drift.
+        let mut e = Episode { receiver_lost: true, ..Episode::default() };
+        open(&mut e);
+        assert_eq!(e.step(110.0, true, &back, 20.0, false), EpisodeStep { fault: true, reset: false });
+    }
+
+    #[test]
+    fn the_learnt_accelerometer_noise_is_a_density_the_same_at_any_rate() {
+        // White noise of σ 1 m/s² per sample: consecutive differences have
+        // variance 2σ² per axis, so the density is σ²·dt: 0.01 (m/s²)²·s at
+        // 100 Hz and 0.0025 at 400 Hz.
+        for (rate, want) in [(100.0, 0.01), (400.0, 0.0025)] {
+            let mut n = ImuNoise::default();
+            let mut rng = crate::sim::Rng::new(7);
+            let mut psd = 0.0;
+            for k in 0..(rate as usize * 60) {
+                let f = [rng.normal(), rng.normal(), rng.normal() - 9.81];
+                psd = n.learn(k as f64 / rate, f);
+            }
+            assert!((psd / want - 1.0).abs() < 0.15, "rate {rate}: {psd} against {want}");
+        }
+    }
+
+    #[test]
+    fn the_clock_rate_is_learnt_from_gps_displacement_against_integrated_velocity() {
+        // A vehicle circling at 12 m/s, stamped by a boot clock at 0.923×:
+        // boot intervals are 0.923 of true ones, so the GPS moves 1/0.923
+        // of its velocity integrated over boot time.
+        let mut r = ClockRate::new();
+        let (rate, w, speed) = (0.923, 0.05, 12.0);
+        let at = |tt: f64| {
+            let (sn, cs) = (w * tt).sin_cos();
+            (Vector3::new(speed / w * sn, speed / w * (1.0 - cs), 0.0), Vector3::new(speed * cs, speed * sn, 0.0))
+        };
+        let mut prev = None;
+        for k in 0..1200 {
+            let tt = 0.2 * k as f64;
+            let (p, v) = at(tt);
+            let t = tt * rate;
+            if let Some(pv) = prev {
+                r.observe(pv, t, &p, &v);
+            }
+            prev = Some((t, p, v));
+        }
+        assert!((r.scale - 1.0 / rate).abs() < 0.003, "{}", r.scale);
+        // True time, or within the dead band: no correction.
+        let mut r = ClockRate::new();
+        let mut prev = None;
+        for k in 0..1200 {
+            let t = 0.2 * k as f64;
+            let (p, v) = at(t);
+            if let Some(pv) = prev {
+                r.observe(pv, t, &p, &v);
+            }
+            prev = Some((t, p, v));
+        }
+        assert!((r.scale - 1.0).abs() < 0.003, "{}", r.scale);
     }
 }
