@@ -296,6 +296,21 @@ const IMU_ARM_WINDOWS: u32 = 50;
 /// about 3σ in that second.
 const IMU_RECENT_S: f64 = 1.0;
 const IMU_CALM: f64 = 1.0;
+/// s: the shortest silence of the receiver read as an outage (see
+/// `Clock::is_outage`).
+const SILENT_OUTAGE_S: f64 = 1.5;
+/// s: the longest a position-only episode (the GPS velocity still aiding
+/// the estimate) is judged before the estimate re-anchors on the GPS. Its
+/// reference, the GPS velocity integrated, drifts slowly, so it can judge a
+/// persisting step far longer than an IMU-only coast (`maxCoast`).
+const POSITION_COAST_S: f64 = 120.0;
+/// A return jump must undo an offset of at least this many σ_Δ...
+const RETURN_MIN_SIGMAS: f64 = 6.0;
+/// ...and, along the offset's direction, between these shares of it (a
+/// return to where the GPS was before, up to the coast's drift).
+const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
+/// s: time constant of the learnt accelerometer noise.
+const IMU_PSD_TAU: f64 = 2.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
@@ -333,6 +348,7 @@ pub struct Detector {
     imu: Option<(f64, ImuInput)>,
     ind: IndicatorEngine,
     clock: Clock,
+    imu_noise: ImuNoise,
     last_est: LastEstimate,
     consistency: Consistency,
     episode: Episode,
@@ -411,8 +427,13 @@ impl Clock {
 
     /// Outage at a row without a fix at `t` s: after a fix has been seen,
     /// the receiver says it has none (`reports_no_fix`), or (`flying`) no
-    /// fix arrived within `timeout` s (by default 1.5 periods, or more for a
-    /// jittery receiver: a late fix is not an outage). It lasts
+    /// fix arrived within `timeout` s. By default silence must outlast
+    /// `SILENT_OUTAGE_S` and 3 receiver periods (more for a jittery
+    /// receiver): loggers drop GPS records for up to about a second while
+    /// the receiver keeps its fix (78 such gaps of 0.5–0.94 s on the shared
+    /// ArduPilot logs, the receiver's own clock advancing across each),
+    /// whereas a receiver that loses its fix says so (a no-fix record
+    /// 1.2 s after the last fix in all 9 real losses there). It lasts
     /// (`in_outage`) until the next fix. A receiver that reports losing its
     /// fix is an outage on the ground too; mere silence counts only in
     /// flight (logs often stop sending GPS after landing).
@@ -426,8 +447,35 @@ impl Clock {
         if reports_no_fix && t - lf > 0.5 * self.gps_dt {
             return true;
         }
-        let auto = (1.5 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
+        let auto = SILENT_OUTAGE_S.max(3.0 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
         flying && t - lf > timeout.unwrap_or(auto)
+    }
+}
+
+/// The accelerometer noise learnt in flight: half the mean square of
+/// consecutive differences per axis times the sample interval, an
+/// exponential mean over `IMU_PSD_TAU` s: a density ((m/s²)²·s), the same
+/// at any IMU rate for the same sensor, that grows with vibration and with
+/// snapshot sampling. The filter adds it to its process noise.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct ImuNoise {
+    /// Previous sample (t s, specific force m/s²).
+    prev: Option<(f64, [f64; 3])>,
+    psd: f64,
+}
+
+impl ImuNoise {
+    /// One IMU sample at `t` s; returns the density.
+    fn learn(&mut self, t: f64, f: [f64; 3]) -> f64 {
+        if let Some((tp, fp)) = self.prev {
+            let dt = t - tp;
+            if dt > 0.0 && dt < 0.5 {
+                let ms = (0..3).map(|a| (f[a] - fp[a]).powi(2)).sum::<f64>() / 6.0;
+                self.psd += (dt / IMU_PSD_TAU).min(1.0) * (ms * dt - self.psd);
+            }
+        }
+        self.prev = Some((t, f));
+        self.psd
     }
 }
 
@@ -453,6 +501,8 @@ struct Residuals {
     /// Each GPS axis' previous residual, for `IndicatorEngine::accept` once
     /// the axis is fed to the filter.
     prev_r: [f64; 6],
+    /// Position reference residuals (the last accepted epoch's), m.
+    r_ref: [f64; 3],
 }
 
 impl Residuals {
@@ -472,6 +522,7 @@ impl LastEstimate {
     fn residuals(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix) -> Residuals {
         let pin = kf.position_innovation(&fix.y);
         let pos_prior = kf.position();
+        let r_ref = core::array::from_fn(|a| ind.reference(a));
         let mut prev_r = [0.0; 6];
         for a in 0..3 {
             prev_r[a] = ind.previous(a);
@@ -486,7 +537,7 @@ impl LastEstimate {
             }
             vin
         });
-        Residuals { pin, vin, prev_r }
+        Residuals { pin, vin, prev_r, r_ref }
     }
 
     /// The filter's estimate after a GPS epoch's update (or re-anchoring).
@@ -516,11 +567,98 @@ struct Consistency {
     /// Previous GPS fix (t s, position NED m, velocity m/s) for the
     /// position–velocity test.
     last_gps: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    /// Latest baro sample (t s, altitude m) for the baro–GPS test.
+    last_baro: Option<(f64, f64)>,
+    /// The boot clock's rate against true time.
+    rate: ClockRate,
+}
+
+/// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
+/// clock that runs 0.92× true time (the shared 2014 ArduPilot logs:
+/// 0.9229–0.9235 by the receiver's own time of week). Timestamps from it
+/// make the GPS position move faster than its velocity integrated over the
+/// stamps, by 8% of the speed: a ramp in every flight. The GPS itself says
+/// how fast the clock runs: over blocks of at least `CLOCK_BLOCK_S`, its
+/// horizontal displacement against its velocity integrated over boot time,
+/// regressed through the origin: `scale = Σ ΔP·ΔV / Σ |ΔV|²`. It is used
+/// once `Σ |ΔV|²` reaches `CLOCK_MIN_SXX` (about 70 m flown), clamped to
+/// `CLOCK_RANGE`, and multiplies every time step of the filter and of the
+/// position–velocity test. A clock error always points along the velocity;
+/// a position fault does not and averages out over headings, so blocks in
+/// a position-only episode still count; blocks with the receiver's
+/// velocity withheld do not.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct ClockRate {
+    /// True seconds per boot-clock second.
+    scale: f64,
+    sxy: f64,
+    sxx: f64,
+    /// Block start: boot time (s) and horizontal GPS position (m).
+    start: Option<(f64, [f64; 2])>,
+    /// Horizontal GPS velocity integrated since the block start, m.
+    dv: [f64; 2],
+    /// Boot time of the last epoch observed, s.
+    last: Option<f64>,
+}
+
+const CLOCK_BLOCK_S: f64 = 5.0;
+const CLOCK_MIN_SXX: f64 = 5.0e3;
+/// m: a block must span at least this much flight to count.
+const CLOCK_MIN_BLOCK_M: f64 = 10.0;
+const CLOCK_RANGE: (f64, f64) = (0.9, 1.15);
+/// Rate errors below 1% are left alone: the clocks this corrects are off by
+/// several percent (8% on the 2014 ArduPilot builds), while the estimate
+/// itself wanders by a fraction of a percent.
+const CLOCK_DEAD_BAND: f64 = 0.01;
+
+impl ClockRate {
+    fn new() -> Self {
+        ClockRate { scale: 1.0, sxy: 0.0, sxx: 0.0, start: None, dv: [0.0; 2], last: None }
+    }
+
+    /// One GPS interval: the previous epoch (boot time `pt` s, position
+    /// `pp` m, velocity `pv` m/s, NED) to this one (`t`, `y`, `v`).
+    fn observe(&mut self, (pt, pp, pv): (f64, Vector3<f64>, Vector3<f64>), t: f64, y: &Vector3<f64>, v: &Vector3<f64>) {
+        // A broken chain (skipped epochs) restarts the block.
+        if self.last != Some(pt) || self.start.is_none() {
+            self.start = Some((pt, [pp[0], pp[1]]));
+            self.dv = [0.0; 2];
+        }
+        self.last = Some(t);
+        for a in 0..2 {
+            self.dv[a] += 0.5 * (v[a] + pv[a]) * (t - pt);
+        }
+        let Some((t0, p0)) = self.start else { return };
+        if t - t0 < CLOCK_BLOCK_S {
+            return;
+        }
+        let vv = self.dv[0] * self.dv[0] + self.dv[1] * self.dv[1];
+        if vv > CLOCK_MIN_BLOCK_M * CLOCK_MIN_BLOCK_M {
+            self.sxy += (y[0] - p0[0]) * self.dv[0] + (y[1] - p0[1]) * self.dv[1];
+            self.sxx += vv;
+            if self.sxx >= CLOCK_MIN_SXX {
+                let k = (self.sxy / self.sxx).clamp(CLOCK_RANGE.0, CLOCK_RANGE.1);
+                // Within the dead band the estimate is GPS noise, not a
+                // clock: correcting by it would only add its error.
+                self.scale = if (k - 1.0).abs() < CLOCK_DEAD_BAND { 1.0 } else { k };
+            }
+        }
+        self.start = Some((t, [y[0], y[1]]));
+        self.dv = [0.0; 2];
+    }
 }
 
 impl Consistency {
     fn new() -> Self {
-        Consistency { alt_int: 0.0, dv_imu: Vector3::zeros(), imu_gap: true, flight_time: 0.0, last_gps: None }
+        Consistency {
+            alt_int: 0.0,
+            dv_imu: Vector3::zeros(),
+            imu_gap: true,
+            flight_time: 0.0,
+            last_gps: None,
+            last_baro: None,
+            rate: ClockRate::new(),
+        }
     }
 
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
@@ -537,10 +675,13 @@ impl Consistency {
         }
     }
 
-    /// The tests stage: feed the fix to the position–velocity and IMU
-    /// consistency tests, decide whether the IMU test joins R, and close the
-    /// epoch's indicators. `vel_withheld`: the GPS velocity is withheld.
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool) -> Indicators {
+    /// The tests stage: feed the fix to the position–velocity, baro–GPS and
+    /// IMU consistency tests, decide whether the IMU test joins R, and close
+    /// the epoch's indicators. `vel_withheld`: the GPS velocity is withheld;
+    /// `position_episode`: a position fault is being judged with the GPS
+    /// velocity still trusted, so the position–velocity sum is held.
+    /// `learn_rate`: the receiver is trusted enough to teach the clock rate.
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, position_episode: bool, learn_rate: bool) -> Indicators {
         let (t, y) = (fix.t, fix.y);
         // Position–velocity consistency: the GPS's own position change
         // against the trapezoid of its velocities (filter-independent).
@@ -549,13 +690,21 @@ impl Consistency {
         // bias and hold the test up after it clears.
         match (&fix.vel, self.last_gps) {
             (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
-                let dtg = t - pt;
+                if learn_rate {
+                    self.rate.observe((pt, pp, pv), t, &y, v);
+                }
+                let dtg = (t - pt) * self.rate.scale;
                 let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
+                ind.hold_pv(position_episode);
                 ind.observe_pv(u, !vel_withheld);
             }
             _ => ind.clear_pv(),
         }
         self.last_gps = fix.vel.map(|v| (t, y, v));
+        // Baro against the GPS altitude (up), with the latest baro sample.
+        if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
+            ind.observe_baro_gps(t, b + y[2]);
+        }
         // IMU consistency: GPS horizontal velocity against the filter's
         // IMU-predicted velocity changes, only while every prediction since
         // the last epoch ran on the IMU.
@@ -683,6 +832,10 @@ struct Evidence<'a> {
     incoherence: f64,
     /// The other method's decision; None for the ANFIS.
     dec: Option<&'a Decision>,
+    /// This epoch's residuals (for the episode's ends).
+    res: &'a Residuals,
+    /// Learnt σ_Δ of the position axes, m.
+    sigma_pos: [f64; 3],
 }
 
 impl Evidence<'_> {
@@ -897,14 +1050,47 @@ impl Episode {
             return EpisodeStep { fault: false, reset: false };
         }
         let start = *self.coast_start.get_or_insert(t);
-        let coasted_out = t - start > max_coast;
         self.withheld.withhold(ev);
         self.normal_run = 0;
         if self.withheld.gps_vel() {
             self.receiver_lost = true;
         }
-        let recovered = self.recovered(t - start, ev, oracle);
-        EpisodeStep { fault: !recovered, reset: coasted_out || recovered }
+        let coasted_out = t - start > self.coast_limit(max_coast);
+        let ended = !oracle && (self.recovered(t - start, ev, oracle) || self.returned(ev));
+        EpisodeStep { fault: !ended, reset: coasted_out || ended }
+    }
+
+    /// How long the episode may coast, s: an IMU-only coast (the whole
+    /// receiver withheld) `max_coast`; a position-only one, judged against
+    /// the GPS velocity integrated, `POSITION_COAST_S`.
+    fn coast_limit(&self, max_coast: f64) -> f64 {
+        if self.receiver_lost {
+            max_coast
+        } else {
+            max_coast.max(POSITION_COAST_S)
+        }
+    }
+
+    /// A return jump ends a position-only episode: in one epoch the GPS
+    /// position came back to where the last accepted epoch had it, undoing
+    /// most of the offset along its direction (projecting ignores the
+    /// estimate's drift across it, such as its height while a horizontal
+    /// step is withheld). The GPS is the truth again: re-anchor on it
+    /// rather than read the estimate's coast drift as a new fault.
+    fn returned(&self, ev: &Evidence) -> bool {
+        if !self.withheld.gps_pos() || self.receiver_lost || self.imu {
+            return false;
+        }
+        let res = ev.res;
+        let off: [f64; 3] = core::array::from_fn(|a| res.prev_r[a] - res.r_ref[a]);
+        let jump: [f64; 3] = core::array::from_fn(|a| res.pin.nu[a] - res.prev_r[a]);
+        let off2: f64 = off.iter().map(|x| x * x).sum();
+        let sigma2: f64 = ev.sigma_pos.iter().map(|x| x * x).sum();
+        if !(off2 > RETURN_MIN_SIGMAS * RETURN_MIN_SIGMAS * sigma2) {
+            return false;
+        }
+        let undone = -(0..3).map(|a| jump[a] * off[a]).sum::<f64>() / off2;
+        (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone)
     }
 
     /// Whether the episode, `elapsed` s old, is over and the filter should
@@ -1027,6 +1213,7 @@ impl Detector {
             imu: None,
             ind: IndicatorEngine::new(cfg.indicator_settings()),
             clock: Clock::new(),
+            imu_noise: ImuNoise::default(),
             last_est: LastEstimate { pos: Vector3::zeros(), vel: Vector3::zeros(), baro_h: None },
             consistency: Consistency::new(),
             episode: Episode::default(),
@@ -1170,6 +1357,7 @@ impl Detector {
         }
         self.hold_imu(t, s);
         if s.has_baro() {
+            self.consistency.last_baro = Some((t, s.baro));
             self.stats.baro_rows += 1;
             self.baro_row(t, s.baro);
         }
@@ -1192,10 +1380,12 @@ impl Detector {
         self.episode.withheld.release();
     }
 
-    /// Predict the filter by `dt` s to `t`, on the held IMU if it is recent.
+    /// Predict the filter by `dt` boot-clock s to `t`, on the held IMU if
+    /// it is recent; the step is taken in true time (see `ClockRate`).
     fn predict(&mut self, t: f64, dt: f64) {
         let imu = self.imu.filter(|(ti, _)| t - ti <= IMU_TIMEOUT).map(|(_, u)| u);
         let Some(kf) = self.kf.as_mut() else { return };
+        let dt = dt * self.consistency.rate.scale;
         let v0 = kf.velocity();
         match kf.predict(dt, imu.as_ref()) {
             Ok(()) => self.consistency.advance(dt, v0, kf.velocity(), kf_flying(kf), imu.is_some()),
@@ -1209,6 +1399,10 @@ impl Detector {
             if let Some(q) = quat_from_wxyz(s.qw, s.qx, s.qy, s.qz) {
                 self.imu = Some((t, ImuInput { f_body: Vector3::new(s.ax, s.ay, s.az), q }));
                 self.stats.imu_rows += 1;
+                let psd = self.imu_noise.learn(t, [s.ax, s.ay, s.az]);
+                if let Some(kf) = self.kf.as_mut() {
+                    kf.set_accel_psd(psd);
+                }
             }
         }
     }
@@ -1292,7 +1486,9 @@ impl Detector {
         let noise = self.cfg.filter_noise();
         let v0 = fix.vel.unwrap_or_else(Vector3::zeros);
         let vs = if fix.vel.is_some() { noise.gps_vel } else { 3.0 };
-        self.kf = Some(Kf::new(noise, fix.y, v0, noise.gps_pos_h, vs));
+        let mut kf = Kf::new(noise, fix.y, v0, noise.gps_pos_h, vs);
+        kf.set_accel_psd(self.imu_noise.psd);
+        self.kf = Some(kf);
         self.last_est.pos = fix.y;
         self.last_est.vel = v0;
         self.ind.reset_references();
@@ -1317,7 +1513,10 @@ impl Detector {
         };
         let res = self.last_est.residuals(kf, &mut self.ind, &fix);
         res.write(&mut self.resid);
-        let ind = self.consistency.tests(&mut self.ind, &fix, self.episode.withheld.gps_vel());
+        let position_episode = self.episode.active && !self.episode.imu && !self.episode.withheld.gps_vel();
+        let vel_withheld = self.episode.withheld.gps_vel();
+        let learn_rate = !self.episode.active && !self.episode.receiver_lost;
+        let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, position_episode, learn_rate);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -1330,6 +1529,8 @@ impl Detector {
             r_vel: self.ind.r_vel_unfolded(),
             incoherence: self.ind.incoherence(),
             dec: verdict.dec.as_ref(),
+            res: &res,
+            sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
         };
         let step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         let fed = if step.reset {
@@ -1383,6 +1584,7 @@ impl Detector {
         } else {
             self.methods.learn_normal(self.cfg.method, v.dr);
             self.ind.accept_pv();
+            self.ind.accept_baro_gps();
             if self.flying() {
                 self.ind.accept_imu();
             }
@@ -1593,11 +1795,18 @@ mod tests {
     }
 
     fn evidence(ind: &Indicators) -> Evidence<'_> {
-        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None }
+        // Residuals that sit on their references: no return jump.
+        let res: &'static Residuals = Box::leak(Box::new(Residuals {
+            pin: Innovation::default(),
+            vin: None,
+            prev_r: [0.0; 6],
+            r_ref: [0.0; 3],
+        }));
+        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None, res, sigma_pos: [0.1; 3] }
     }
 
     #[test]
-    fn the_clock_learns_a_10_hz_period_and_silence_becomes_an_outage_after_1_5_periods() {
+    fn the_clock_learns_a_10_hz_period_and_silence_becomes_an_outage_after_1_5_s() {
         let mut c = Clock::new();
         assert_eq!(c.row(0.0, 1.0), (0.0, false));
         for k in 0..400 {
@@ -1606,11 +1815,21 @@ mod tests {
         // From the 0.2 s prior the period converges to 0.1 s, jitter to 0.
         assert!((c.gps_dt - 0.1).abs() < 1e-6 && c.gps_jitter < 1e-6, "{} {}", c.gps_dt, c.gps_jitter);
         let lf = 39.9;
-        // 1.5 periods + 20 ms: 0.17 s after the last fix, in flight only.
-        assert!(!c.is_outage(lf + 0.16, false, false, true, None));
-        assert!(c.is_outage(lf + 0.18, false, false, true, None));
-        assert!(!c.is_outage(lf + 0.18, false, false, false, None));
-        assert!(!c.is_outage(lf + 0.18, false, false, true, Some(0.5)));
+        // Silence: 1.5 s + 20 ms after the last fix (a logger's dropped
+        // records last up to about a second), in flight only.
+        assert!(!c.is_outage(lf + 1.0, false, false, true, None));
+        assert!(!c.is_outage(lf + 1.51, false, false, true, None));
+        assert!(c.is_outage(lf + 1.53, false, false, true, None));
+        assert!(!c.is_outage(lf + 1.53, false, false, false, None));
+        assert!(!c.is_outage(lf + 1.53, false, false, true, Some(2.0)));
+        assert!(c.is_outage(lf + 0.18, false, false, true, Some(0.17)));
+        // A 1 Hz receiver: 3 periods.
+        let mut slow = Clock::new();
+        for k in 0..400 {
+            slow.fix(k as f64);
+        }
+        assert!(!slow.is_outage(399.0 + 2.9, false, false, true, None));
+        assert!(slow.is_outage(399.0 + 3.1, false, false, true, None));
         // The receiver's own "no fix" counts after half a period, on the ground too.
         assert!(!c.is_outage(lf + 0.04, true, false, false, None));
         assert!(c.is_outage(lf + 0.06, true, false, false, None));
@@ -1677,14 +1896,23 @@ mod tests {
     }
 
     #[test]
-    fn an_episode_re_anchors_after_max_coast_or_after_five_calm_epochs() {
+    fn an_episode_re_anchors_after_its_coast_limit_or_after_five_calm_epochs() {
         let ind = clean();
-        // Past maxCoast (20 s): re-anchor, still a fault.
+        // The whole receiver withheld (an IMU-only coast), past maxCoast
+        // (20 s): re-anchor, still a fault.
         let mut e = Episode::default();
         let mut bad = clean();
         bad.r_group[0] = 10.0;
+        bad.r_group[1] = 10.0;
         assert_eq!(e.step(100.0, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: false });
         assert_eq!(e.step(120.5, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: true });
+        // Position only (the GPS velocity still aiding): judged for 120 s.
+        let mut e = Episode::default();
+        let mut pos = clean();
+        pos.r_group[0] = 10.0;
+        assert_eq!(e.step(100.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(219.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(220.5, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: true });
         // Agreement for 5 epochs (and over 0.5 s): recovered, verdict normal.
         let mut e = Episode::default();
         for k in 0..4 {
@@ -1717,5 +1945,99 @@ mod tests {
             assert_eq!((e.withheld.groups, e.coast_start), ([false; GROUPS], None));
         }
         assert!(!e.receiver_lost);
+    }
+
+    /// Residuals of an epoch whose previous position residual was `prev`,
+    /// the reference `r_ref`, and this one `now` (m).
+    fn residuals(r_ref: [f64; 3], prev: [f64; 3], now: [f64; 3]) -> &'static Residuals {
+        let mut pin = Innovation::default();
+        pin.nu = now;
+        let mut prev_r = [0.0; 6];
+        prev_r[..3].copy_from_slice(&prev);
+        Box::leak(Box::new(Residuals { pin, vin: None, prev_r, r_ref }))
+    }
+
+    #[test]
+    fn a_return_jump_that_undoes_the_offset_ends_a_position_episode() {
+        let mut pos = clean();
+        pos.r_group[0] = 10.0;
+        let open = |e: &mut Episode| e.step(100.0, true, &evidence(&pos), 20.0, false);
+        // A 10 m step north held, then the GPS back to within 1 m (the
+        // estimate's drift across the offset, here 2 m down, does not count).
+        let mut e = Episode::default();
+        open(&mut e);
+        let back = Evidence { res: residuals([0.0; 3], [10.0, 0.0, 0.0], [0.8, 0.3, 2.0]), ..evidence(&pos) };
+        assert_eq!(e.step(160.0, true, &back, 20.0, false), EpisodeStep { fault: false, reset: true });
+        // A jump that undoes a third of it, or overshoots to the other side
+        // by as much, is no return.
+        for now in [[6.7, 0.0, 0.0], [-6.0, 0.0, 0.0]] {
+            let mut e = Episode::default();
+            open(&mut e);
+            let ev = Evidence { res: residuals([0.0; 3], [10.0, 0.0, 0.0], now), ..evidence(&pos) };
+            assert_eq!(e.step(160.0, true, &ev, 20.0, false), EpisodeStep { fault: true, reset: false }, "{now:?}");
+        }
+        // An offset within 6 σ_Δ of the reference is noise, not a step to undo.
+        let mut e = Episode::default();
+        open(&mut e);
+        let small = Evidence { res: residuals([0.0; 3], [0.5, 0.0, 0.0], [0.0; 3]), ..evidence(&pos) };
+        assert_eq!(e.step(160.0, true, &small, 20.0, false), EpisodeStep { fault: true, reset: false });
+        // An IMU-only coast (receiver withheld) does not end on a jump: its
+        // offset is the IMU's drift.
+        let mut e = Episode { receiver_lost: true, ..Episode::default() };
+        open(&mut e);
+        assert_eq!(e.step(110.0, true, &back, 20.0, false), EpisodeStep { fault: true, reset: false });
+    }
+
+    #[test]
+    fn the_learnt_accelerometer_noise_is_a_density_the_same_at_any_rate() {
+        // White noise of σ 1 m/s² per sample: consecutive differences have
+        // variance 2σ² per axis, so the density is σ²·dt: 0.01 (m/s²)²·s at
+        // 100 Hz and 0.0025 at 400 Hz.
+        for (rate, want) in [(100.0, 0.01), (400.0, 0.0025)] {
+            let mut n = ImuNoise::default();
+            let mut rng = crate::sim::Rng::new(7);
+            let mut psd = 0.0;
+            for k in 0..(rate as usize * 60) {
+                let f = [rng.normal(), rng.normal(), rng.normal() - 9.81];
+                psd = n.learn(k as f64 / rate, f);
+            }
+            assert!((psd / want - 1.0).abs() < 0.15, "rate {rate}: {psd} against {want}");
+        }
+    }
+
+    #[test]
+    fn the_clock_rate_is_learnt_from_gps_displacement_against_integrated_velocity() {
+        // A vehicle circling at 12 m/s, stamped by a boot clock at 0.923×:
+        // boot intervals are 0.923 of true ones, so the GPS moves 1/0.923
+        // of its velocity integrated over boot time.
+        let mut r = ClockRate::new();
+        let (rate, w, speed) = (0.923, 0.05, 12.0);
+        let at = |tt: f64| {
+            let (sn, cs) = (w * tt).sin_cos();
+            (Vector3::new(speed / w * sn, speed / w * (1.0 - cs), 0.0), Vector3::new(speed * cs, speed * sn, 0.0))
+        };
+        let mut prev = None;
+        for k in 0..1200 {
+            let tt = 0.2 * k as f64;
+            let (p, v) = at(tt);
+            let t = tt * rate;
+            if let Some(pv) = prev {
+                r.observe(pv, t, &p, &v);
+            }
+            prev = Some((t, p, v));
+        }
+        assert!((r.scale - 1.0 / rate).abs() < 0.003, "{}", r.scale);
+        // True time, or within the dead band: no correction.
+        let mut r = ClockRate::new();
+        let mut prev = None;
+        for k in 0..1200 {
+            let t = 0.2 * k as f64;
+            let (p, v) = at(t);
+            if let Some(pv) = prev {
+                r.observe(pv, t, &p, &v);
+            }
+            prev = Some((t, p, v));
+        }
+        assert!((r.scale - 1.0).abs() < 0.003, "{}", r.scale);
     }
 }

@@ -153,6 +153,13 @@ pub struct Kf {
     /// suspected, so the filter does not learn a fault as the sensor's bias
     /// and carry that error past the fault's end.
     hold_bias: bool,
+    /// Accelerometer noise learnt in flight, as a density (m/s²)²·s: the
+    /// airframe's vibration as the IMU sampled it. Added to the configured
+    /// density, so the prediction's covariance is as honest about a
+    /// vibrating or snapshot-sampled IMU as about a quiet one, whatever its
+    /// rate (a density, not a per-sample variance).
+    #[serde(default)]
+    accel_psd: f64,
 }
 
 impl Kf {
@@ -169,7 +176,15 @@ impl Kf {
             P[(IB + i, IB + i)] = 0.05 * 0.05;
         }
         P[(IBARO, IBARO)] = 100.0;
-        Kf { x, P, noise, baro_initialised: false, pending: Pending::default(), hold_bias: false }
+        Kf { x, P, noise, baro_initialised: false, pending: Pending::default(), hold_bias: false, accel_psd: 0.0 }
+    }
+
+    /// Set the learnt accelerometer noise density, (m/s²)²·s (see
+    /// `accel_psd`); a negative or non-finite value is ignored.
+    pub fn set_accel_psd(&mut self, psd: f64) {
+        if psd.is_finite() && psd >= 0.0 {
+            self.accel_psd = psd;
+        }
     }
 
     /// Hold (or release) the accelerometer-bias estimate (see `hold_bias`).
@@ -252,7 +267,7 @@ impl Kf {
                 // Compose the step's transition onto the pending one.
                 pd.phi_pb += pd.phi_vb * dt - C * (0.5 * dt2);
                 pd.phi_vb -= C * dt;
-                q_acc = self.noise.accel * self.noise.accel;
+                q_acc = self.noise.accel * self.noise.accel + self.accel_psd;
                 pd.qb += self.noise.accel_bias_rw * self.noise.accel_bias_rw * dt;
             }
             None => {

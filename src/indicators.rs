@@ -331,6 +331,12 @@ pub struct IndicatorEngine {
     pv: PvTest,
     baro: LagTest<1>,
     imu: LagTest<2>,
+    /// Baro against the GPS altitude (`z = baro − alt` per GPS epoch): the
+    /// baro group's R is capped by it, so the baro is condemned only when it
+    /// departs from the GPS altitude as well as from the filter and the
+    /// Doppler-integrated height.
+    baro_gps: LagTest<1>,
+    baro_gps_pending: f64,
     /// Largest statistic of each test since the last `close_epoch`.
     baro_pending: f64,
     imu_pending: f64,
@@ -364,6 +370,11 @@ struct PvTest {
     inc_cap: usize,
     /// Statistic of the current epoch, NaN when not observed this epoch.
     stat: f64,
+    /// While a position fault is judged: the clipped mismatch summed from
+    /// the start of the window that caught it (per axis) and its epoch
+    /// count. The window forgets a slow ramp's early part; this sum does
+    /// not, so the statistic keeps growing for as long as the ramp lasts.
+    held: Option<([f64; 3], usize)>,
 }
 
 /// Initial and floor σ of the window sum `S`, m.
@@ -397,6 +408,7 @@ impl PvTest {
             inc_head: 0,
             inc_cap: cap.div_ceil(4 * PV_WINDOW_FACTOR).clamp(1, 4),
             stat: f64::NAN,
+            held: None,
         }
     }
     fn clear(&mut self) {
@@ -405,6 +417,7 @@ impl PvTest {
         self.sum = [0.0; 3];
         self.since_resum = 0;
         self.stat = f64::NAN;
+        self.held = None;
     }
     fn sigma(&self, a: usize) -> f64 {
         self.ms[a].sqrt().max(PV_FLOOR)
@@ -453,6 +466,12 @@ impl PvTest {
             self.sum[a] += u[a];
         }
         self.head = (self.head + 1) % cap;
+        if let Some((h, n)) = self.held.as_mut() {
+            for a in 0..3 {
+                h[a] += u[a];
+            }
+            *n += 1;
+        }
         self.since_resum += 1;
         if self.since_resum >= cap {
             self.since_resum = 0;
@@ -470,10 +489,26 @@ impl PvTest {
                     z * z
                 })
                 .sum();
-            (z2 / 3.0).sqrt()
+            let window = (z2 / 3.0).sqrt();
+            // The held sum is a longer window: a random walk's spread grows
+            // with √n, so σ_S is scaled by √(n / cap).
+            let held = self.held.map_or(0.0, |(h, n)| {
+                let scale = (n as f64 / cap as f64).max(1.0).sqrt();
+                let z2: f64 = (0..3).map(|a| (h[a] / (self.sigma(a) * scale)).powi(2)).sum();
+                (z2 / 3.0).sqrt()
+            });
+            window.max(held)
         } else {
             f64::NAN
         };
+    }
+    /// Start the held sum from the current (full) window, or stop it.
+    fn set_hold(&mut self, on: bool) {
+        match (on, self.held.is_some()) {
+            (true, false) if self.len == self.ring.len() => self.held = Some((self.sum, self.len)),
+            (false, true) => self.held = None,
+            _ => {}
+        }
     }
     fn accept(&mut self) {
         if self.len == 0 {
@@ -697,6 +732,10 @@ const BARO_SIGMA0: f64 = 1.0;
 const BARO_FLOOR: f64 = 0.8;
 const BARO_ALPHA: f64 = 0.005;
 const BARO_TAU: f64 = 20.0;
+/// The baro–GPS altitude test: the GPS altitude is noisier than the baro,
+/// so a larger start and floor (m); σ learnt from the first windows on.
+const BARO_GPS_SIGMA0: f64 = 2.0;
+const BARO_GPS_FLOOR: f64 = 1.0;
 /// IMU consistency: window, s; ring capacity (GPS epochs); σ start/floor, m/s; α.
 pub const IMU_SPAN: f64 = 3.0;
 /// Scale of the IMU consistency where it joins the velocity group's R: the
@@ -747,6 +786,8 @@ impl IndicatorEngine {
             },
             pv: PvTest::new(PV_WINDOW_FACTOR * w),
             baro: LagTest::new(BARO_CAP, BARO_SPAN, BARO_SIGMA0, BARO_FLOOR, BARO_ALPHA, BARO_TAU, false),
+            baro_gps: LagTest::new(BARO_CAP, BARO_SPAN, BARO_GPS_SIGMA0, BARO_GPS_FLOOR, BARO_ALPHA, BARO_TAU, true),
+            baro_gps_pending: f64::NAN,
             imu: LagTest::new(IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true),
             baro_pending: f64::NAN,
             imu_pending: f64::NAN,
@@ -781,6 +822,7 @@ impl IndicatorEngine {
         ring("pv", self.pv.ring.len(), fresh.pv.ring.len(), self.pv.head, self.pv.len)?;
         ring("pv.inc", self.pv.inc_cap, fresh.pv.inc_cap, self.pv.inc_head, self.pv.inc_len)?;
         ring("baro", self.baro.ring.len(), fresh.baro.ring.len(), self.baro.head, self.baro.len)?;
+        ring("baro_gps", self.baro_gps.ring.len(), fresh.baro_gps.ring.len(), self.baro_gps.head, self.baro_gps.len)?;
         ring("imu", self.imu.ring.len(), fresh.imu.ring.len(), self.imu.head, self.imu.len)?;
         Ok(())
     }
@@ -910,6 +952,23 @@ impl IndicatorEngine {
         self.baro.accept();
     }
 
+    /// Feed one GPS epoch's baro minus GPS altitude (m, the latest baro
+    /// sample) at time `t` s.
+    pub fn observe_baro_gps(&mut self, t: f64, z: f64) {
+        self.baro_gps_pending = self.baro_gps.push(t, [z]);
+    }
+
+    /// The epoch was normal: the baro–GPS test learns its σ from it.
+    pub fn accept_baro_gps(&mut self) {
+        self.baro_gps.accept();
+    }
+
+    /// Hold the position–velocity sum from the current window on while a
+    /// position fault is judged (see `PvTest::held`).
+    pub fn hold_pv(&mut self, on: bool) {
+        self.pv.set_hold(on);
+    }
+
     /// Feed one GPS epoch's `z = v_gps − V` (horizontal N, E; V: the
     /// IMU-predicted velocity changes summed, m/s) at time `t`.
     pub fn observe_imu(&mut self, t: f64, z: [f64; 2]) {
@@ -951,6 +1010,12 @@ impl IndicatorEngine {
     }
     pub fn clear_baro(&mut self) {
         self.baro.clear();
+    }
+
+    /// The axis' reference residual: the post-update residual of the last
+    /// accepted epoch (NaN before the first).
+    pub fn reference(&self, axis: usize) -> f64 {
+        self.axes.get(axis).filter(|a| a.has_ref).map_or(f64::NAN, |a| a.r_ref)
     }
 
     /// Residual the axis last had before the current one (for `accept`).
@@ -999,6 +1064,7 @@ impl IndicatorEngine {
         let pv = core::mem::replace(&mut self.pv.stat, f64::NAN);
         let baro = core::mem::replace(&mut self.baro_pending, f64::NAN);
         let imu = core::mem::replace(&mut self.imu_pending, f64::NAN);
+        let baro_gps = core::mem::replace(&mut self.baro_gps_pending, f64::NAN);
         let mut unfolded: f64 = 0.0;
         let mut vel_unfolded = f64::NAN;
         for g in 0..GROUPS {
@@ -1012,6 +1078,12 @@ impl IndicatorEngine {
                 }
                 if g == 2 && baro.is_finite() {
                     rg = rg.max(baro);
+                }
+                // Condemn the baro only if it also left the GPS altitude:
+                // one that follows the GPS altitude while the filter's
+                // height drifts, or through a GPS vertical fault, is fine.
+                if g == 2 && baro_gps.is_finite() {
+                    rg = rg.min(baro_gps.max(1.0));
                 }
                 unfolded = unfolded.max(rg);
                 if g == 1 {

@@ -589,7 +589,11 @@ pub fn fit_adaptive(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<AdaptiveT
     let (p, c) = linear_regression(&xs, &det[..m])?;
     let u = -su;
     let x_m = m as f64;
-    let raw = equilibrium(u, a, p, c, x_m)?;
+    // No crossing when uncertainty does not fall and detectability does not
+    // rise with the offset (u + p ≤ 0: the training residuals give the fit
+    // no slope): the largest offset considered is the only defensible
+    // operating point, rather than no threshold at all.
+    let raw = if u + p > 1e-12 { equilibrium(u, a, p, c, x_m)? } else { x_m };
     let x_star = raw.clamp(1.0, x_m);
     let rho = cfg.psi * x_star;
     let sigma = max_window_count(residuals, cfg.w, rho) as f64;
