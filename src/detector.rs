@@ -310,6 +310,27 @@ const TRAIN_EPOCHS: usize = 5;
 const CONFIDENT_FAULT: f64 = 0.8;
 const CONFIDENT_NORMAL: f64 = 0.2;
 const TRAIN_LR: f64 = 0.05;
+/// A retrain touches every sample of D1 ∪ D2 (to train) and of D0 (to
+/// validate): W ≤ 2q + |D0| samples. It waits for at least W / this many new
+/// D2 samples (and for TC), so the work per new sample is bounded whatever
+/// q and TC are: with TC = 1 and q = 100 000 a retrain at every fault epoch
+/// made an audit quadratic in the log's length. The default (TC 100, q 500,
+/// |D0| 1000: W ≤ 2000) always meets it, so its verdicts do not change.
+pub const RETRAIN_SAMPLES_PER_NEW: usize = 20;
+
+/// What retraining has cost so far (not in snapshots): for the linear-cost
+/// regression test and the bench.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RetrainCost {
+    /// Retrains run (accepted or not).
+    pub runs: u64,
+    /// New D2 samples those retrains waited for.
+    pub new_samples: u64,
+    /// Samples they touched: |D1| + |D2| + |D0| each.
+    pub samples: u64,
+    /// Sample-operations: `TRAIN_EPOCHS` passes over D1 ∪ D2, two over D0.
+    pub sample_ops: u64,
+}
 
 /// The streaming detector.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -379,6 +400,8 @@ pub struct Detector {
     /// set a retrained ANFIS must not do worse on.
     d0_x: Vec<[f64; 2]>,
     d0_y: Vec<f64>,
+    #[serde(skip)]
+    retrain_cost: RetrainCost,
     /// Previous GPS epoch's innovations (pos, vel) for Δr; None after a
     /// (re)initialisation.
     prev_nu: Option<[f64; 6]>,
@@ -448,6 +471,7 @@ impl Detector {
             train_y: Vec::with_capacity(2 * q),
             d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
             d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
+            retrain_cost: RetrainCost::default(),
             prev_nu: None,
             maha: Default::default(),
             baro_inn: None,
@@ -1034,7 +1058,7 @@ impl Detector {
                 self.d2.push(x);
                 self.new_faults += 1;
             }
-            if anfis && self.cfg.retrain && !self.oracle && self.new_faults >= self.cfg.tc {
+            if anfis && self.cfg.retrain && !self.oracle && self.retrain_due() {
                 self.retrain();
             }
         } else {
@@ -1070,6 +1094,12 @@ impl Detector {
     /// current one: online data may drift, but not so far that the detector
     /// forgets the labelled faults it shipped with.
     pub fn retrain(&mut self) {
+        let w = self.retrain_samples();
+        let c = &mut self.retrain_cost;
+        c.runs += 1;
+        c.new_samples += self.new_faults as u64;
+        c.samples += w as u64;
+        c.sample_ops += (TRAIN_EPOCHS * (self.d1.items().len() + self.d2.items().len()) + 2 * self.d0_x.len()) as u64;
         self.new_faults = 0;
         self.train_x.clear();
         self.train_y.clear();
@@ -1089,6 +1119,22 @@ impl Detector {
             self.anfis = cand;
             self.stats.retrains += 1;
         }
+    }
+
+    /// TC new D2 samples, and enough of them to pay for the retrain (see
+    /// [`RETRAIN_SAMPLES_PER_NEW`]).
+    fn retrain_due(&self) -> bool {
+        self.new_faults >= self.cfg.tc && self.new_faults.saturating_mul(RETRAIN_SAMPLES_PER_NEW) >= self.retrain_samples()
+    }
+
+    /// Samples one retrain touches: D1 ∪ D2 and D0.
+    fn retrain_samples(&self) -> usize {
+        self.d1.items().len() + self.d2.items().len() + self.d0_x.len()
+    }
+
+    /// What retraining has cost so far.
+    pub fn retrain_cost(&self) -> RetrainCost {
+        self.retrain_cost
     }
 
     /// Misclassified D0 samples at the configured threshold.
