@@ -81,6 +81,11 @@ fn set(o: &Object, k: &str, v: &JsValue) {
     let _ = Reflect::set(o, &JsValue::from_str(k), v);
 }
 
+/// `[t, status, f, r, c, kind, gpsEpoch]` (what `pushRowInto` writes).
+fn output_row(o: &Output) -> [f64; 7] {
+    [o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }]
+}
+
 fn output_object(o: &Output) -> JsValue {
     let obj = Object::new();
     set(&obj, "t", &o.t.into());
@@ -186,7 +191,14 @@ pub struct Detector {
     rows: Vec<Sample>,
     /// Reused input buffer for `pushRow` / `pushRowInto`.
     row: Vec<f64>,
+    /// The package's `push` fast path: 26 inputs then 7 outputs, written and
+    /// read by JS through a view on wasm memory (boxed: its address is fixed
+    /// for the detector's life), so a row costs one call with no arguments.
+    io: Box<[f64; IO_LEN]>,
 }
+
+/// `Detector::io`: the row's 26 columns, then `[t, status, f, r, c, kind, gpsEpoch]`.
+const IO_LEN: usize = COLUMNS.len() + 7;
 
 /// One chunk of `pushColumns` results, then copied into the JS arrays.
 #[derive(Default)]
@@ -201,7 +213,7 @@ struct ChunkOut {
 #[wasm_bindgen]
 impl Detector {
     fn wrap(inner: CoreDetector) -> Detector {
-        Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new(), row: Vec::new() }
+        Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new(), row: Vec::new(), io: Box::new([f64::NAN; IO_LEN]) }
     }
 
     /// `new Detector(config)`: every field optional; unknown fields throw.
@@ -277,9 +289,32 @@ impl Detector {
         }
         let s = self.read_row(row, "pushRowInto: row")?;
         let o = self.inner.push(&s).map_err(err)?;
-        let vals = [o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }];
+        let vals = output_row(&o);
         // Cannot fail: `out` was checked above and no JS ran since.
         js_in::write_f64(out, 0, &vals, "pushRowInto: out").map_err(err)
+    }
+
+    /// Byte offset in wasm memory of this detector's row buffer (33 f64s),
+    /// for the package's own `push` (see `pkg/index.js`); not an API.
+    #[wasm_bindgen(js_name = __ioOffset)]
+    pub fn io_offset(&self) -> f64 {
+        self.io.as_ptr() as usize as f64
+    }
+
+    /// Push the row in the row buffer and write its outputs after it; not
+    /// an API (the package's `push` is). Touches no JS value.
+    #[wasm_bindgen(js_name = __pushIo)]
+    pub fn push_io(&mut self) -> Result<(), JsError> {
+        let mut s = Sample::default();
+        for (i, v) in self.io.iter().take(COLUMNS.len()).enumerate() {
+            s.set(i, *v);
+        }
+        let o = self.inner.push(&s).map_err(err)?;
+        let vals = output_row(&o);
+        for (d, v) in self.io.iter_mut().skip(COLUMNS.len()).zip(vals) {
+            *d = v;
+        }
+        Ok(())
     }
 
     /// Rows accepted so far (the next row's index in error messages).
@@ -916,6 +951,12 @@ pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] fil
     let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
     let model = Model::train(&refs, &cfg, 42).map_err(err)?;
     serde_wasm_bindgen::to_value(&model).map_err(err)
+}
+
+/// The wasm memory, for the package's `push` fast path; not an API.
+#[wasm_bindgen(js_name = __memory)]
+pub fn memory() -> JsValue {
+    wasm_bindgen::memory()
 }
 
 /// Bytes of wasm linear memory (for memory-flatness checks).
