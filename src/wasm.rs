@@ -540,14 +540,15 @@ impl Auditor {
     }
 
     /// Process up to `rows` more rows; returns the fraction done.
-    pub fn step(&mut self, rows: f64) -> f64 {
-        match self.run.as_mut() {
+    pub fn step(&mut self, #[wasm_bindgen(unchecked_param_type = "number")] rows: &JsValue) -> Result<f64, JsError> {
+        let rows = if rows.is_undefined() { 1.0 } else { js_in::num(rows, "Auditor.step: rows").map_err(err)? };
+        Ok(match self.run.as_mut() {
             Some(r) => {
                 r.step(if rows.is_finite() && rows > 0.0 { rows as usize } else { 1 });
                 r.progress()
             }
             None => 1.0,
-        }
+        })
     }
 
     /// Finish (processing what is left) and return `{ report, columns }`.
@@ -573,10 +574,10 @@ impl StreamAuditor {
     #[wasm_bindgen(constructor)]
     pub fn new(
         #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,
-        #[wasm_bindgen(js_name = keepOutputs)] keep_outputs: Option<bool>,
+        #[wasm_bindgen(js_name = keepOutputs, unchecked_param_type = "boolean | undefined")] keep_outputs: JsValue,
     ) -> Result<StreamAuditor, JsError> {
         let cfg = config_from(&config)?;
-        Ok(StreamAuditor { run: Some(audit::StreamAudit::new(&cfg, keep_outputs.unwrap_or(false)).map_err(err)?) })
+        Ok(StreamAuditor { run: Some(audit::StreamAudit::new(&cfg, js_in::flag(&keep_outputs, "StreamAuditor: keepOutputs").map_err(err)?).map_err(err)?) })
     }
 
     /// Feed the next chunk (any split); returns the rows it completed.
@@ -744,7 +745,17 @@ impl TightDetectorJs {
 /// `{ csv, config, faultyPrn, faultStart, faultEnd }`: feed `csv` to a
 /// `new TightDetector(config)`.
 #[wasm_bindgen(js_name = tightSimulate, unchecked_return_type = "{ csv: string; config: object; faultyPrn: number; faultStart: number; faultEnd: number }")]
-pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, JsError> {
+pub fn tight_simulate(
+    #[wasm_bindgen(unchecked_param_type = "number")] env: &JsValue,
+    #[wasm_bindgen(unchecked_param_type = "number", js_name = faultType)] fault_type: &JsValue,
+    #[wasm_bindgen(unchecked_param_type = "number")] seed: &JsValue,
+) -> Result<JsValue, JsError> {
+    let small = |v: &JsValue, what: &str| -> Result<u32, JsError> {
+        let x = js_in::num(v, what).map_err(err)?;
+        Ok(if x.fract() == 0.0 && (0.0..=1e6).contains(&x) { x as u32 } else { u32::MAX })
+    };
+    let (env, fault_type) = (small(env, "tightSimulate: env")?, small(fault_type, "tightSimulate: faultType")?);
+    let seed = js_in::num(seed, "tightSimulate: seed").map_err(err)?;
     use crate::tight::fdi::{FdsrConfig, Strategy};
     use crate::tight::scenario::{environments, run_with_rows, FaultSpec, FaultType, RunSpec, SimConfig, World};
     let cfg = SimConfig::default();
@@ -895,7 +906,8 @@ pub fn read_log(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsV
 
 /// Simulate a built-in scenario by name (see `scenarioNames()`) into navlog CSV text.
 #[wasm_bindgen]
-pub fn simulate(#[wasm_bindgen(unchecked_param_type = "string")] name: &JsValue, seed: f64) -> Result<String, JsError> {
+pub fn simulate(#[wasm_bindgen(unchecked_param_type = "string")] name: &JsValue, #[wasm_bindgen(unchecked_param_type = "number")] seed: &JsValue) -> Result<String, JsError> {
+    let seed = js_in::num(seed, "simulate: seed").map_err(err)?;
     let name = js_in::string(name, MAX_NAME, "simulate: name").map_err(err)?;
     if !(seed.is_finite() && seed >= 0.0 && seed.fract() == 0.0 && seed < 9.0e15) {
         return Err(err(format!("seed: must be a non-negative integer, got {seed}")));

@@ -87,7 +87,7 @@ pub fn own_keys(obj: &JsValue, what: &str) -> Result<Vec<String>, String> {
 
 /// A JS number as JSON: integers (other than −0) as integers, so that integer
 /// fields deserialize; non-finite numbers are an error (JSON has none).
-fn number(x: f64, path: &str) -> Result<Value, String> {
+fn json_number(x: f64, path: &str) -> Result<Value, String> {
     if !x.is_finite() {
         return Err(format!("{path}: must be a finite number, got {x}"));
     }
@@ -125,7 +125,7 @@ fn plain_at(v: &JsValue, path: &str, depth: usize, budget: &mut usize) -> Result
         return Ok(Some(Value::Bool(b)));
     }
     if let Some(x) = v.as_f64() {
-        return number(x, path).map(Some);
+        return json_number(x, path).map(Some);
     }
     if let Some(s) = v.as_string() {
         return Ok(Some(Value::String(s)));
@@ -348,4 +348,17 @@ pub fn string(v: &JsValue, max: usize, what: &str) -> Result<String, String> {
         return Err(format!("{what}: {n} characters exceed the limit of {max}"));
     }
     v.as_string().ok_or_else(|| format!("{what}: must be a string"))
+}
+
+/// A number argument (no coercion: an object's `valueOf` never runs).
+pub fn num(v: &JsValue, what: &str) -> Result<f64, String> {
+    v.as_f64().ok_or_else(|| format!("{what}: must be a number"))
+}
+
+/// An optional boolean argument (`undefined` / `null`: false).
+pub fn flag(v: &JsValue, what: &str) -> Result<bool, String> {
+    if v.is_undefined() || v.is_null() {
+        return Ok(false);
+    }
+    v.as_bool().ok_or_else(|| format!("{what}: must be a boolean"))
 }
