@@ -815,6 +815,10 @@ pub fn tight_gan_train(
     opts.gan.epochs = 5;
     if !(options.is_undefined() || options.is_null()) {
         let o: serde_json::Map<String, serde_json::Value> = plain_of(&options, "tightGanTrain options")?;
+        const KNOWN: [&str; 6] = ["trainSeeds", "calibSeeds", "epochs", "hidden", "window", "alpha"];
+        if let Some(k) = o.keys().find(|k| !KNOWN.contains(&k.as_str())) {
+            return Err(err(format!("tightGanTrain options.{k}: unknown field (known: {})", KNOWN.join(", "))));
+        }
         let seeds = |k: &str| -> Result<Option<Vec<u64>>, JsError> {
             let Some(v) = o.get(k) else { return Ok(None) };
             let arr: Vec<f64> = serde_json::from_value(v.clone()).map_err(|e| err(format!("tightGanTrain: {k}: {e}")))?;
