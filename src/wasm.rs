@@ -970,7 +970,7 @@ pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] fil
 }
 
 /// The wasm memory, for the package's `push` fast path; not an API.
-#[wasm_bindgen(js_name = __memory)]
+#[wasm_bindgen(js_name = __memory, unchecked_return_type = "WebAssembly.Memory")]
 pub fn memory() -> JsValue {
     wasm_bindgen::memory()
 }
