@@ -178,6 +178,12 @@ impl ConfigInput {
             return Ok(Config::default());
         }
         let v: serde_json::Value = serde_json::from_str(text).map_err(|e| format!("config: not JSON: {e}"))?;
+        Self::from_value(v)
+    }
+
+    /// Check a config given as JSON data (the wasm facade copies a JS
+    /// object into this form first, reading every field once).
+    pub fn from_value(v: serde_json::Value) -> Result<Config, String> {
         let serde_json::Value::Object(map) = v else {
             return Err("config: must be a JSON object".into());
         };

@@ -334,6 +334,27 @@ const TRAIN_EPOCHS: usize = 5;
 const CONFIDENT_FAULT: f64 = 0.8;
 const CONFIDENT_NORMAL: f64 = 0.2;
 const TRAIN_LR: f64 = 0.05;
+/// A retrain touches every sample of D1 ∪ D2 (to train) and of D0 (to
+/// validate): W ≤ 2q + |D0| samples. It waits for at least W / this many new
+/// D2 samples (and for TC), so the work per new sample is bounded whatever
+/// q and TC are: with TC = 1 and q = 100 000 a retrain at every fault epoch
+/// made an audit quadratic in the log's length. The default (TC 100, q 500,
+/// |D0| 1000: W ≤ 2000) always meets it, so its verdicts do not change.
+pub const RETRAIN_SAMPLES_PER_NEW: usize = 20;
+
+/// What retraining has cost so far (not in snapshots): for the linear-cost
+/// regression test and the bench.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RetrainCost {
+    /// Retrains run (accepted or not).
+    pub runs: u64,
+    /// New D2 samples those retrains waited for.
+    pub new_samples: u64,
+    /// Samples they touched: |D1| + |D2| + |D0| each.
+    pub samples: u64,
+    /// Sample-operations: `TRAIN_EPOCHS` passes over D1 ∪ D2, two over D0.
+    pub sample_ops: u64,
+}
 
 /// The streaming detector: the filter and the indicator engine, plus one
 /// small state per stage of the GPS epoch (see `Detector::gps_epoch`).
@@ -1157,6 +1178,8 @@ struct Learning {
     /// set a retrained ANFIS must not do worse on.
     d0_x: Vec<[f64; 2]>,
     d0_y: Vec<f64>,
+    #[serde(skip)]
+    cost: RetrainCost,
 }
 
 impl Learning {
@@ -1170,7 +1193,19 @@ impl Learning {
             train_y: Vec::with_capacity(2 * q),
             d0_x: model.d1.iter().chain(model.d2.iter()).copied().collect(),
             d0_y: model.d1.iter().map(|_| 0.0).chain(model.d2.iter().map(|_| 1.0)).collect(),
+            cost: RetrainCost::default(),
         }
+    }
+
+    /// TC new D2 samples, and enough of them to pay for the retrain (see
+    /// [`RETRAIN_SAMPLES_PER_NEW`]).
+    fn retrain_due(&self, tc: usize) -> bool {
+        self.new_faults >= tc && self.new_faults.saturating_mul(RETRAIN_SAMPLES_PER_NEW) >= self.retrain_samples()
+    }
+
+    /// Samples one retrain touches: D1 ∪ D2 and D0.
+    fn retrain_samples(&self) -> usize {
+        self.d1.items().len() + self.d2.items().len() + self.d0_x.len()
     }
 
     /// File an ANFIS epoch (input `x`, F-indicator `f`) by its own verdict
@@ -1578,7 +1613,7 @@ impl Detector {
             self.learning.file(fault, v.f, v.x, ind);
         }
         if fault {
-            if anfis && self.cfg.retrain && !self.oracle && self.learning.new_faults >= self.cfg.tc {
+            if anfis && self.cfg.retrain && !self.oracle && self.learning.retrain_due(self.cfg.tc) {
                 self.retrain();
             }
         } else {
@@ -1597,6 +1632,12 @@ impl Detector {
     /// current one: online data may drift, but not so far that the detector
     /// forgets the labelled faults it shipped with.
     pub fn retrain(&mut self) {
+        let l = &mut self.learning;
+        let w = l.retrain_samples();
+        l.cost.runs += 1;
+        l.cost.new_samples += l.new_faults as u64;
+        l.cost.samples += w as u64;
+        l.cost.sample_ops += (TRAIN_EPOCHS * (l.d1.items().len() + l.d2.items().len()) + 2 * l.d0_x.len()) as u64;
         self.learning.new_faults = 0;
         self.learning.train_x.clear();
         self.learning.train_y.clear();
@@ -1616,6 +1657,11 @@ impl Detector {
             self.learning.anfis = cand;
             self.stats.retrains += 1;
         }
+    }
+
+    /// What retraining has cost so far.
+    pub fn retrain_cost(&self) -> RetrainCost {
+        self.learning.cost
     }
 
     /// Misclassified D0 samples at the configured threshold.

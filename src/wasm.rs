@@ -7,7 +7,10 @@
 //! is untouched by a rejected row or batch.
 
 use js_sys::{Array, Float64Array, Object, Reflect, Uint8Array};
+use serde::de::DeserializeOwned;
 use wasm_bindgen::prelude::*;
+
+mod js_in;
 
 use crate::audit;
 use crate::config::{Config, ConfigInput};
@@ -27,28 +30,60 @@ fn err(msg: impl core::fmt::Display) -> JsError {
     JsError::new(&msg.to_string())
 }
 
+/// Largest `pushColumns` batch (rows per call). The batch is processed in
+/// chunks of [`CHUNK_ROWS`], so wasm memory does not grow with it; the limit
+/// bounds the result arrays (26 bytes a row, allocated in JS).
+pub const MAX_BATCH_ROWS: usize = 1 << 24;
+/// Rows per chunk of a `pushColumns` batch: 26 columns × 8 B × 4096 = 852 KB
+/// of scratch, reused.
+const CHUNK_ROWS: usize = 4096;
+/// Largest byte input (a log, a snapshot, a CSV chunk) per call.
+const MAX_BYTES: usize = 1 << 31;
+/// Largest numeric array per call (`metrics`).
+const MAX_VALUES: usize = 1 << 27;
+/// Largest text argument (`TightDetector.pushCsv`), UTF-16 units.
+const MAX_TEXT: usize = 1 << 26;
+/// Largest name argument (scenario, log name).
+const MAX_NAME: usize = 4096;
+
+/// The checked config. Fields are read once each, by name, through
+/// catching calls (see `js_in`): a throwing getter or Proxy trap is a
+/// config error naming the field, and nothing is left half-done.
 fn config_from(v: &JsValue) -> Result<Config, JsError> {
     if v.is_undefined() || v.is_null() {
         return Ok(Config::default());
     }
-    if !v.is_object() {
+    if !v.is_object() || v.is_function() {
         return Err(err("config: must be a plain object"));
     }
-    for k in Object::keys(v.unchecked_ref::<Object>()).iter() {
-        let name = k.as_string().unwrap_or_default();
+    for name in js_in::own_keys(v, "config").map_err(err)? {
         ConfigInput::check_field_name(&name).map_err(err)?;
-        // Field by field, so a type error names its field.
-        let one = Object::new();
-        set(&one, &name, &Reflect::get(v, &k).unwrap_or(JsValue::UNDEFINED));
-        serde_wasm_bindgen::from_value::<ConfigInput>(one.into()).map_err(|e| err(format!("config.{name}: {e}")))?;
     }
-    let input: ConfigInput = serde_wasm_bindgen::from_value(v.clone()).map_err(|e| err(format!("config: {e}")))?;
-    input.check().map_err(err)
+    let mut map = serde_json::Map::new();
+    for name in ConfigInput::FIELDS {
+        let what = format!("config.{name}");
+        let x = js_in::get(v, &JsValue::from_str(name), &what).map_err(err)?;
+        if let Some(x) = js_in::plain(&x, &what).map_err(err)? {
+            map.insert(name.to_string(), x);
+        }
+    }
+    ConfigInput::from_value(serde_json::Value::Object(map)).map_err(err)
+}
+
+/// A user object as `T`, copied to plain data first (see `js_in::plain`).
+fn plain_of<T: DeserializeOwned>(v: &JsValue, what: &str) -> Result<T, JsError> {
+    let x = js_in::plain(v, what).map_err(err)?.unwrap_or(serde_json::Value::Null);
+    serde_json::from_value(x).map_err(|e| err(format!("{what}: {e}")))
 }
 
 fn set(o: &Object, k: &str, v: &JsValue) {
     // Setting a property on a fresh plain object cannot fail.
     let _ = Reflect::set(o, &JsValue::from_str(k), v);
+}
+
+/// `[t, status, f, r, c, kind, gpsEpoch]` (what `pushRowInto` writes).
+fn output_row(o: &Output) -> [f64; 7] {
+    [o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }]
 }
 
 fn output_object(o: &Output) -> JsValue {
@@ -141,23 +176,51 @@ export interface LogColumns { format: string; rows: number; columns: Partial<Rec
 "#;
 
 /// The streaming detector (contract §2).
+///
+/// Every method reads and checks all its JS arguments first, through
+/// catching calls only (`js_in`), and touches the detector's state only once
+/// they are all good; no JS exception can unwind through it, so the borrow
+/// wasm-bindgen holds on `self` is always released and a rejected call
+/// changes nothing.
 #[wasm_bindgen]
 pub struct Detector {
     inner: CoreDetector,
-    /// Reused column buffers for `pushColumns` (grown, never shrunk).
+    /// Reused column buffers for `pushColumns` (one chunk, grown, never shrunk).
     cols: Vec<Vec<f64>>,
-    /// Reused row buffer for `pushColumns`.
+    /// Reused row buffer for `pushColumns` (one chunk).
     rows: Vec<Sample>,
+    /// Reused input buffer for `pushRow` / `pushRowInto`.
+    row: Vec<f64>,
+    /// The package's `push` fast path: 26 inputs then 7 outputs, written and
+    /// read by JS through a view on wasm memory (boxed: its address is fixed
+    /// for the detector's life), so a row costs one call with no arguments.
+    io: Box<[f64; IO_LEN]>,
+}
+
+/// `Detector::io`: the row's 26 columns, then `[t, status, f, r, c, kind, gpsEpoch]`.
+const IO_LEN: usize = COLUMNS.len() + 7;
+
+/// One chunk of `pushColumns` results, then copied into the JS arrays.
+#[derive(Default)]
+struct ChunkOut {
+    status: Vec<u8>,
+    kind: Vec<u8>,
+    f: Vec<f64>,
+    r: Vec<f64>,
+    c: Vec<f64>,
 }
 
 #[wasm_bindgen]
 impl Detector {
+    fn wrap(inner: CoreDetector) -> Detector {
+        Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new(), row: Vec::new(), io: Box::new([f64::NAN; IO_LEN]) }
+    }
+
     /// `new Detector(config)`: every field optional; unknown fields throw.
     #[wasm_bindgen(constructor)]
     pub fn new(#[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Detector, JsError> {
         let cfg = config_from(&config)?;
-        let inner = CoreDetector::new(cfg).map_err(err)?;
-        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new() })
+        Ok(Self::wrap(CoreDetector::new(cfg).map_err(err)?))
     }
 
     /// Push one sample (plain object keyed by CSV column names).
@@ -169,60 +232,88 @@ impl Detector {
             return Err(err(format!("row {row}: sample must be a plain object")));
         }
         let mut s = Sample::default();
-        let mut bad: Option<&'static str> = None;
-        KEYS.with(|keys| {
+        KEYS.with(|keys| -> Result<(), JsError> {
             for (i, k) in keys.iter().enumerate() {
-                let v = Reflect::get(sample, k).unwrap_or(JsValue::UNDEFINED);
+                let field = COLUMNS.get(i).copied().unwrap_or("?");
+                // A getter that re-enters this detector finds it borrowed and
+                // throws; that throw, like any other, is caught here.
+                let v = js_in::get(sample, k, &format!("row {row}: field '{field}'")).map_err(err)?;
                 if v.is_undefined() || v.is_null() {
                     continue;
                 }
-                match v.as_f64() {
-                    Some(x) => s.set(i, x),
-                    None => {
-                        bad = Some(COLUMNS[i]);
-                        break;
-                    }
-                }
+                let x = v.as_f64().ok_or_else(|| err(format!("row {row}: field '{field}': must be a number")))?;
+                s.set(i, x);
             }
-        });
-        if let Some(field) = bad {
-            return Err(err(format!("row {row}: field '{field}': must be a number")));
-        }
+            Ok(())
+        })?;
         let out = self.inner.push(&s).map_err(err)?;
         Ok(output_object(&out))
     }
 
-    /// Push one row given as the contract's 26 columns in `COLUMNS` order
-    /// (NaN = absent). The package's JS `push` packs objects into a reused
-    /// Float64Array and calls this: JS property reads are far cheaper than
-    /// 26 `Reflect.get` calls from wasm.
-    #[wasm_bindgen(js_name = pushRow, unchecked_return_type = "PushResult")]
-    pub fn push_row(&mut self, row: &[f64]) -> Result<JsValue, JsError> {
-        if row.len() != COLUMNS.len() {
-            return Err(err(format!("pushRow: expected {} values, got {}", COLUMNS.len(), row.len())));
+    /// The 26 contract columns of one row from `row` (Float64Array or array).
+    fn read_row(&mut self, row: &JsValue, what: &str) -> Result<Sample, JsError> {
+        js_in::f64s(row, COLUMNS.len(), what, &mut self.row).map_err(err)?;
+        if self.row.len() != COLUMNS.len() {
+            return Err(err(format!("{what}: expected {} values, got {}", COLUMNS.len(), self.row.len())));
         }
         let mut s = Sample::default();
-        for (i, v) in row.iter().enumerate() {
+        for (i, v) in self.row.iter().enumerate() {
             s.set(i, *v);
         }
+        Ok(s)
+    }
+
+    /// Push one row given as the contract's 26 columns in `COLUMNS` order
+    /// (NaN = absent), a Float64Array or an array of numbers.
+    #[wasm_bindgen(js_name = pushRow, unchecked_return_type = "PushResult")]
+    pub fn push_row(&mut self, #[wasm_bindgen(unchecked_param_type = "Float64Array | number[]")] row: &JsValue) -> Result<JsValue, JsError> {
+        let s = self.read_row(row, "pushRow: row")?;
         let out = self.inner.push(&s).map_err(err)?;
         Ok(output_object(&out))
     }
 
     /// Like `pushRow`, but writes `[t, status, f, r, c, kind, gpsEpoch]` into
-    /// `out` (length ≥ 7) instead of returning an object, so the JS wrapper
-    /// builds the result object itself: one boundary crossing per row.
+    /// the Float64Array `out` (length ≥ 7) instead of returning an object, so
+    /// the JS wrapper builds the result object itself: one boundary crossing
+    /// per row. `out` is checked before the row is pushed, so a bad `out`
+    /// consumes nothing.
     #[wasm_bindgen(js_name = pushRowInto)]
-    pub fn push_row_into(&mut self, row: &[f64], out: &mut [f64]) -> Result<(), JsError> {
-        if row.len() != COLUMNS.len() || out.len() < 7 {
-            return Err(err(format!("pushRowInto: expected {} values and an output of 7, got {} and {}", COLUMNS.len(), row.len(), out.len())));
+    pub fn push_row_into(
+        &mut self,
+        #[wasm_bindgen(unchecked_param_type = "Float64Array | number[]")] row: &JsValue,
+        #[wasm_bindgen(unchecked_param_type = "Float64Array")] out: &JsValue,
+    ) -> Result<(), JsError> {
+        let n = js_in::f64_out_len(out, "pushRowInto: out").map_err(err)?;
+        if n < 7 {
+            return Err(err(format!("pushRowInto: out must have at least 7 elements, got {n} (a detached buffer has 0)")));
         }
+        let s = self.read_row(row, "pushRowInto: row")?;
+        let o = self.inner.push(&s).map_err(err)?;
+        let vals = output_row(&o);
+        // Cannot fail: `out` was checked above and no JS ran since.
+        js_in::write_f64(out, 0, &vals, "pushRowInto: out").map_err(err)
+    }
+
+    /// Byte offset in wasm memory of this detector's row buffer (33 f64s),
+    /// for the package's own `push` (see `pkg/index.js`); not an API.
+    #[wasm_bindgen(js_name = __ioOffset)]
+    pub fn io_offset(&self) -> f64 {
+        self.io.as_ptr() as usize as f64
+    }
+
+    /// Push the row in the row buffer and write its outputs after it; not
+    /// an API (the package's `push` is). Touches no JS value.
+    #[wasm_bindgen(js_name = __pushIo)]
+    pub fn push_io(&mut self) -> Result<(), JsError> {
         let mut s = Sample::default();
-        for (i, v) in row.iter().enumerate() {
+        for (i, v) in self.io.iter().take(COLUMNS.len()).enumerate() {
             s.set(i, *v);
         }
         let o = self.inner.push(&s).map_err(err)?;
-        out[..7].copy_from_slice(&[o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }]);
+        let vals = output_row(&o);
+        for (d, v) in self.io.iter_mut().skip(COLUMNS.len()).zip(vals) {
+            *d = v;
+        }
         Ok(())
     }
 
@@ -235,86 +326,82 @@ impl Detector {
     /// Push a columnar batch: `{ t: Float64Array, lat: Float64Array, ... }`,
     /// NaN = absent. Validates the whole batch first, so a rejected batch
     /// changes nothing. Returns `{ status: Uint8Array, f, r, c: Float64Array,
-    /// kind: Uint8Array }`, one entry per row.
+    /// kind: Uint8Array }`, one entry per row. Processed in chunks of 4096
+    /// rows, so wasm memory does not grow with the batch; at most
+    /// 16 777 216 rows per call.
     #[wasm_bindgen(js_name = pushColumns, unchecked_return_type = "ColumnsResult")]
     pub fn push_columns(&mut self, #[wasm_bindgen(unchecked_param_type = "NavColumns")] columns: &JsValue) -> Result<JsValue, JsError> {
-        if !columns.is_object() {
-            return Err(err("pushColumns: argument must be an object of Float64Arrays"));
-        }
-        let mut present = [false; COLUMNS.len()];
-        let mut n: Option<usize> = None;
-        let res: Result<(), JsError> = KEYS.with(|keys| {
-            for (i, k) in keys.iter().enumerate() {
-                let v = Reflect::get(columns, k).unwrap_or(JsValue::UNDEFINED);
-                if v.is_undefined() || v.is_null() {
-                    continue;
-                }
-                let arr: Float64Array = match v.dyn_into::<Float64Array>() {
-                    Ok(a) => a,
-                    Err(_) => return Err(err(format!("pushColumns: column '{}' must be a Float64Array", COLUMNS[i]))),
-                };
-                let len = arr.length() as usize;
-                match n {
-                    None => n = Some(len),
-                    Some(m) if m != len => {
-                        return Err(err(format!("pushColumns: column '{}' has length {len}, expected {m} (all columns must have the same length)", COLUMNS[i])))
-                    }
-                    _ => {}
-                }
-                let buf = &mut self.cols[i];
-                buf.resize(len, 0.0);
-                arr.copy_to(buf);
-                present[i] = true;
-            }
-            Ok(())
-        });
-        res?;
-        if !present[0] {
-            return Err(err("pushColumns: column 't' is required"));
-        }
-        let n = n.unwrap_or(0);
+        let (src, n) = column_sources(columns)?;
         let base = self.inner.stats().rows;
-        // Assemble and validate every row (time order included) before
-        // touching state, so a rejected batch changes nothing.
-        // Absent columns read as NaN; then one pass builds each row from
-        // the 26 columns (no per-value dispatch on the column index).
-        for (i, p) in present.iter().enumerate() {
-            if !*p {
-                self.cols[i].clear();
-                self.cols[i].resize(n, f64::NAN);
-            }
-        }
-        let c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| &self.cols[i][..n]);
-        self.rows.clear();
-        self.rows.extend((0..n).map(|j| Sample::from_columns(&c, j)));
+        // Pass 1: assemble and validate every row (time order included)
+        // before touching state, so a rejected batch changes nothing.
         let mut last_t = f64::NEG_INFINITY;
-        for (j, s) in self.rows.iter().enumerate() {
-            self.inner.validate(s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
-            if s.t < last_t {
-                return Err(err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, s.t, last_t)));
+        let chunks: Vec<(usize, usize)> = (0..n).step_by(CHUNK_ROWS).map(|a| (a, (a + CHUNK_ROWS).min(n))).collect();
+        for &(a, b) in &chunks {
+            self.load_chunk(&src, a, b)?;
+            for (k, s) in self.rows.iter().enumerate() {
+                let j = a + k;
+                self.inner.validate(s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
+                if s.t < last_t {
+                    return Err(err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, s.t, last_t)));
+                }
+                last_t = s.t;
             }
-            last_t = s.t;
         }
-        let mut status = vec![0u8; n];
-        let mut kind = vec![0u8; n];
-        let mut f = vec![0.0; n];
-        let mut r = vec![0.0; n];
-        let mut c = vec![0.0; n];
-        for (j, s) in self.rows.iter().enumerate() {
-            let o = self.inner.push_valid(s);
-            status[j] = o.status;
-            kind[j] = o.kind;
-            f[j] = o.f;
-            r[j] = o.r;
-            c[j] = o.c;
+        let (u8c, f64c) = (js_in::u8_ctor(), js_in::f64_ctor());
+        let new = |c: &JsValue| js_in::new_typed(c, n, "pushColumns: result").map_err(err);
+        let (status, f, r, c, kind) = (new(&u8c)?, new(&f64c)?, new(&f64c)?, new(&f64c)?, new(&u8c)?);
+        // Pass 2: push. A single chunk is still loaded from pass 1.
+        let mut o = ChunkOut::default();
+        for &(a, b) in &chunks {
+            if chunks.len() > 1 {
+                self.load_chunk(&src, a, b)?;
+            }
+            o.status.clear();
+            o.kind.clear();
+            o.f.clear();
+            o.r.clear();
+            o.c.clear();
+            for s in &self.rows {
+                let out = self.inner.push_valid(s);
+                o.status.push(out.status);
+                o.kind.push(out.kind);
+                o.f.push(out.f);
+                o.r.push(out.r);
+                o.c.push(out.c);
+            }
+            // Our own fresh arrays, sized n: these writes cannot fail.
+            let w = "pushColumns: result";
+            js_in::write_u8(&status, a, &o.status, w).map_err(err)?;
+            js_in::write_u8(&kind, a, &o.kind, w).map_err(err)?;
+            js_in::write_f64(&f, a, &o.f, w).map_err(err)?;
+            js_in::write_f64(&r, a, &o.r, w).map_err(err)?;
+            js_in::write_f64(&c, a, &o.c, w).map_err(err)?;
         }
         let obj = Object::new();
-        set(&obj, "status", &Uint8Array::from(&status[..]).into());
-        set(&obj, "f", &Float64Array::from(&f[..]).into());
-        set(&obj, "r", &Float64Array::from(&r[..]).into());
-        set(&obj, "c", &Float64Array::from(&c[..]).into());
-        set(&obj, "kind", &Uint8Array::from(&kind[..]).into());
+        set(&obj, "status", &status);
+        set(&obj, "f", &f);
+        set(&obj, "r", &r);
+        set(&obj, "c", &c);
+        set(&obj, "kind", &kind);
         Ok(obj.into())
+    }
+
+    /// Rows `a..b` of the batch into `self.rows` (absent columns read NaN).
+    fn load_chunk(&mut self, src: &[Option<js_in::F64Source>], a: usize, b: usize) -> Result<(), JsError> {
+        for (i, (s, buf)) in src.iter().zip(self.cols.iter_mut()).enumerate() {
+            match s {
+                Some(s) => s.read(a, b, buf, &format!("pushColumns: column '{}'", COLUMNS.get(i).copied().unwrap_or("?"))).map_err(err)?,
+                None => {
+                    buf.clear();
+                    buf.resize(b - a, f64::NAN);
+                }
+            }
+        }
+        let c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| self.cols.get(i).map_or(&[][..], |v| &v[..]));
+        self.rows.clear();
+        self.rows.extend((0..b - a).map(|j| Sample::from_columns(&c, j)));
+        Ok(())
     }
 
     /// Counters: rows, GPS epochs, retrains, resets, data gaps.
@@ -340,16 +427,53 @@ impl Detector {
     /// A detector resumed from `snapshot()` bytes; its outputs continue
     /// bit-identical to the snapshotted one's. Throws on a damaged snapshot
     /// or one of another format version.
-    pub fn restore(snapshot: &[u8]) -> Result<Detector, JsError> {
-        let inner = CoreDetector::restore(snapshot).map_err(err)?;
-        Ok(Detector { inner, cols: vec![Vec::new(); COLUMNS.len()], rows: Vec::new() })
+    pub fn restore(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] snapshot: &JsValue) -> Result<Detector, JsError> {
+        let bytes = js_in::bytes(snapshot, MAX_BYTES, "restore: snapshot").map_err(err)?;
+        Ok(Self::wrap(CoreDetector::restore(&bytes).map_err(err)?))
     }
+}
+
+/// The batch's columns, checked before anything is read: each present one
+/// a real, attached Float64Array, all of one length n ≤ `MAX_BATCH_ROWS`,
+/// `t` present. Each column's getter runs once.
+fn column_sources(columns: &JsValue) -> Result<(Vec<Option<js_in::F64Source>>, usize), JsError> {
+    if !columns.is_object() {
+        return Err(err("pushColumns: argument must be an object of Float64Arrays"));
+    }
+    let mut src = Vec::with_capacity(COLUMNS.len());
+    let mut n: Option<usize> = None;
+    KEYS.with(|keys| -> Result<(), JsError> {
+        for (k, name) in keys.iter().zip(COLUMNS) {
+            let what = format!("pushColumns: column '{name}'");
+            let v = js_in::get(columns, k, &what).map_err(err)?;
+            if v.is_undefined() || v.is_null() {
+                src.push(None);
+                continue;
+            }
+            let s = js_in::F64Source::new(&v, MAX_BATCH_ROWS, &what).map_err(err)?;
+            let len = s.len();
+            match n {
+                None => n = Some(len),
+                Some(m) if m != len => {
+                    return Err(err(format!("pushColumns: column '{name}' has length {len}, expected {m} (all columns must have the same length)")))
+                }
+                _ => {}
+            }
+            src.push(Some(s));
+        }
+        Ok(())
+    })?;
+    if !matches!(src.first(), Some(Some(_))) {
+        return Err(err("pushColumns: column 't' is required"));
+    }
+    Ok((src, n.unwrap_or(0)))
 }
 
 /// A snapshot's header: `{ version, crateVersion, bytes }` (checksum verified).
 #[wasm_bindgen(js_name = snapshotInfo, unchecked_return_type = "SnapshotInfo")]
-pub fn snapshot_info(snapshot: &[u8]) -> Result<JsValue, JsError> {
-    serde_wasm_bindgen::to_value(&crate::snapshot::info(snapshot).map_err(err)?).map_err(err)
+pub fn snapshot_info(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] snapshot: &JsValue) -> Result<JsValue, JsError> {
+    let bytes = js_in::bytes(snapshot, MAX_BYTES, "snapshotInfo: snapshot").map_err(err)?;
+    serde_wasm_bindgen::to_value(&crate::snapshot::info(&bytes).map_err(err)?).map_err(err)
 }
 
 fn report_object(report: &audit::Report) -> Result<JsValue, JsError> {
@@ -381,9 +505,10 @@ fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue
 /// Audit a whole log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised
 /// by content). Returns `{ report, columns: { t, status, f, r, c, kind, rPn..rBaro } }`.
 #[wasm_bindgen(js_name = auditBytes, unchecked_return_type = "AuditResult")]
-pub fn audit_bytes(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
+pub fn audit_bytes(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
     let cfg = config_from(&config)?;
-    let log = logs::read_any(bytes).map_err(err)?;
+    let bytes = js_in::bytes(bytes, MAX_BYTES, "auditBytes: bytes").map_err(err)?;
+    let log = logs::read_any(&bytes).map_err(err)?;
     let (report, cols) = audit::audit(&log, &cfg).map_err(err)?;
     audit_result(&report, &cols)
 }
@@ -400,9 +525,10 @@ pub struct Auditor {
 #[wasm_bindgen]
 impl Auditor {
     #[wasm_bindgen(constructor)]
-    pub fn new(bytes: &[u8], #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Auditor, JsError> {
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Auditor, JsError> {
         let cfg = config_from(&config)?;
-        let log = logs::read_any(bytes).map_err(err)?;
+        let bytes = js_in::bytes(bytes, MAX_BYTES, "Auditor: bytes").map_err(err)?;
+        let log = logs::read_any(&bytes).map_err(err)?;
         let rows = log.samples.len();
         let run = audit::AuditRun::new(log, &cfg).map_err(err)?;
         Ok(Auditor { run: Some(run), rows })
@@ -414,14 +540,15 @@ impl Auditor {
     }
 
     /// Process up to `rows` more rows; returns the fraction done.
-    pub fn step(&mut self, rows: f64) -> f64 {
-        match self.run.as_mut() {
+    pub fn step(&mut self, #[wasm_bindgen(unchecked_param_type = "number")] rows: &JsValue) -> Result<f64, JsError> {
+        let rows = if rows.is_undefined() { 1.0 } else { js_in::num(rows, "Auditor.step: rows").map_err(err)? };
+        Ok(match self.run.as_mut() {
             Some(r) => {
                 r.step(if rows.is_finite() && rows > 0.0 { rows as usize } else { 1 });
                 r.progress()
             }
             None => 1.0,
-        }
+        })
     }
 
     /// Finish (processing what is left) and return `{ report, columns }`.
@@ -447,16 +574,17 @@ impl StreamAuditor {
     #[wasm_bindgen(constructor)]
     pub fn new(
         #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,
-        #[wasm_bindgen(js_name = keepOutputs)] keep_outputs: Option<bool>,
+        #[wasm_bindgen(js_name = keepOutputs, unchecked_param_type = "boolean | undefined")] keep_outputs: JsValue,
     ) -> Result<StreamAuditor, JsError> {
         let cfg = config_from(&config)?;
-        Ok(StreamAuditor { run: Some(audit::StreamAudit::new(&cfg, keep_outputs.unwrap_or(false)).map_err(err)?) })
+        Ok(StreamAuditor { run: Some(audit::StreamAudit::new(&cfg, js_in::flag(&keep_outputs, "StreamAuditor: keepOutputs").map_err(err)?).map_err(err)?) })
     }
 
     /// Feed the next chunk (any split); returns the rows it completed.
-    pub fn feed(&mut self, chunk: &[u8]) -> Result<f64, JsError> {
+    pub fn feed(&mut self, #[wasm_bindgen(unchecked_param_type = "Uint8Array")] chunk: &JsValue) -> Result<f64, JsError> {
+        let chunk = js_in::bytes(chunk, MAX_BYTES, "StreamAuditor.feed: chunk").map_err(err)?;
         let run = self.run.as_mut().ok_or_else(|| err("StreamAuditor.feed: already finished"))?;
-        Ok(run.feed(chunk).map_err(err)? as f64)
+        Ok(run.feed(&chunk).map_err(err)? as f64)
     }
 
     /// Per-row outputs `{ t, status, f, r, c, kind, rPn..rBaro }` of the latest chunk.
@@ -513,7 +641,7 @@ impl CompareRun {
         let o: CompareOptions = if options.is_undefined() || options.is_null() {
             CompareOptions { seeds: None, methods: None }
         } else {
-            serde_wasm_bindgen::from_value(options).map_err(|e| err(format!("compare options: {e}")))?
+            plain_of(&options, "compare options")?
         };
         let n = o.seeds.unwrap_or(5.0);
         if !(n.is_finite() && n.fract() == 0.0 && (1.0..=100.0).contains(&n)) {
@@ -532,9 +660,11 @@ impl CompareRun {
 
     /// Add a real log (any supported format) under `name`.
     #[wasm_bindgen(js_name = addLog)]
-    pub fn add_log(&mut self, name: &str, bytes: &[u8]) -> Result<(), JsError> {
-        let log = logs::read_any(bytes).map_err(|e| err(format!("{name}: {e}")))?;
-        self.run.as_mut().ok_or_else(|| err("CompareRun: already finished"))?.add_log(name, log);
+    pub fn add_log(&mut self, #[wasm_bindgen(unchecked_param_type = "string")] name: &JsValue, #[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue) -> Result<(), JsError> {
+        let name = js_in::string(name, MAX_NAME, "CompareRun.addLog: name").map_err(err)?;
+        let bytes = js_in::bytes(bytes, MAX_BYTES, "CompareRun.addLog: bytes").map_err(err)?;
+        let log = logs::read_any(&bytes).map_err(|e| err(format!("{name}: {e}")))?;
+        self.run.as_mut().ok_or_else(|| err("CompareRun: already finished"))?.add_log(&name, log);
         Ok(())
     }
 
@@ -573,7 +703,7 @@ impl TightDetectorJs {
         let cfg: crate::tight::stream::TightConfig = if config.is_undefined() || config.is_null() {
             Default::default()
         } else {
-            serde_wasm_bindgen::from_value(config).map_err(|e| err(format!("tight config: {e}")))?
+            plain_of(&config, "tight config")?
         };
         Ok(TightDetectorJs { inner: crate::tight::stream::TightDetector::new(cfg).map_err(err)? })
     }
@@ -581,7 +711,7 @@ impl TightDetectorJs {
     /// One epoch row; returns `{ t, status, faulty_prn, statistic, lambda_max, rdpop, action, n_sats, position_ned, ... }`.
     #[wasm_bindgen(unchecked_return_type = "TightOutput")]
     pub fn push(&mut self, #[wasm_bindgen(unchecked_param_type = "TightRow")] row: JsValue) -> Result<JsValue, JsError> {
-        let row: crate::tight::stream::EpochRow = serde_wasm_bindgen::from_value(row).map_err(|e| err(format!("tight row: {e}")))?;
+        let row: crate::tight::stream::EpochRow = plain_of(&row, "tight row")?;
         let out = self.inner.push(&row).map_err(err)?;
         serde_wasm_bindgen::to_value(&out).map_err(err)
     }
@@ -589,20 +719,22 @@ impl TightDetectorJs {
     /// GAN-FDSR with a model from `tightGanTrain` (its `model` bytes) instead
     /// of the embedded one; `config` as for the constructor.
     #[wasm_bindgen(js_name = withGanModel)]
-    pub fn with_gan_model(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue, model: &[u8]) -> Result<TightDetectorJs, JsError> {
+    pub fn with_gan_model(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue, #[wasm_bindgen(unchecked_param_type = "Uint8Array")] model: &JsValue) -> Result<TightDetectorJs, JsError> {
+        let model = js_in::bytes(model, MAX_BYTES, "withGanModel: model").map_err(err)?;
         let cfg: crate::tight::stream::TightConfig = if config.is_undefined() || config.is_null() {
             Default::default()
         } else {
-            serde_wasm_bindgen::from_value(config).map_err(|e| err(format!("tight config: {e}")))?
+            plain_of(&config, "tight config")?
         };
-        let model = crate::tight::gan_fdsr::GanDetectorModel::from_bytes(model).map_err(err)?;
+        let model = crate::tight::gan_fdsr::GanDetectorModel::from_bytes(&model).map_err(err)?;
         Ok(TightDetectorJs { inner: crate::tight::stream::TightDetector::with_gan(cfg, model).map_err(err)? })
     }
 
     /// Every row of a pseudo-range CSV (`pr_<prn>` or `sat_id` layout); an array of outputs.
     #[wasm_bindgen(js_name = pushCsv, unchecked_return_type = "TightOutput[]")]
-    pub fn push_csv(&mut self, text: &str) -> Result<JsValue, JsError> {
-        let rows = crate::tight::stream::parse_csv(text).map_err(err)?;
+    pub fn push_csv(&mut self, #[wasm_bindgen(unchecked_param_type = "string")] text: &JsValue) -> Result<JsValue, JsError> {
+        let text = js_in::string(text, MAX_TEXT, "pushCsv: text").map_err(err)?;
+        let rows = crate::tight::stream::parse_csv(&text).map_err(err)?;
         let out = self.inner.run(&rows).map_err(err)?;
         serde_wasm_bindgen::to_value(&out).map_err(err)
     }
@@ -613,7 +745,17 @@ impl TightDetectorJs {
 /// `{ csv, config, faultyPrn, faultStart, faultEnd }`: feed `csv` to a
 /// `new TightDetector(config)`.
 #[wasm_bindgen(js_name = tightSimulate, unchecked_return_type = "{ csv: string; config: object; faultyPrn: number; faultStart: number; faultEnd: number }")]
-pub fn tight_simulate(env: u32, fault_type: u32, seed: f64) -> Result<JsValue, JsError> {
+pub fn tight_simulate(
+    #[wasm_bindgen(unchecked_param_type = "number")] env: &JsValue,
+    #[wasm_bindgen(unchecked_param_type = "number", js_name = faultType)] fault_type: &JsValue,
+    #[wasm_bindgen(unchecked_param_type = "number")] seed: &JsValue,
+) -> Result<JsValue, JsError> {
+    let small = |v: &JsValue, what: &str| -> Result<u32, JsError> {
+        let x = js_in::num(v, what).map_err(err)?;
+        Ok(if x.fract() == 0.0 && (0.0..=1e6).contains(&x) { x as u32 } else { u32::MAX })
+    };
+    let (env, fault_type) = (small(env, "tightSimulate: env")?, small(fault_type, "tightSimulate: faultType")?);
+    let seed = js_in::num(seed, "tightSimulate: seed").map_err(err)?;
     use crate::tight::fdi::{FdsrConfig, Strategy};
     use crate::tight::scenario::{environments, run_with_rows, FaultSpec, FaultType, RunSpec, SimConfig, World};
     let cfg = SimConfig::default();
@@ -672,13 +814,14 @@ pub fn tight_gan_train(
     opts.calib_seeds = vec![201, 202];
     opts.gan.epochs = 5;
     if !(options.is_undefined() || options.is_null()) {
-        let get = |k: &str| js_sys::Reflect::get(&options, &JsValue::from_str(k)).unwrap_or(JsValue::UNDEFINED);
+        let o: serde_json::Map<String, serde_json::Value> = plain_of(&options, "tightGanTrain options")?;
+        const KNOWN: [&str; 6] = ["trainSeeds", "calibSeeds", "epochs", "hidden", "window", "alpha"];
+        if let Some(k) = o.keys().find(|k| !KNOWN.contains(&k.as_str())) {
+            return Err(err(format!("tightGanTrain options.{k}: unknown field (known: {})", KNOWN.join(", "))));
+        }
         let seeds = |k: &str| -> Result<Option<Vec<u64>>, JsError> {
-            let v = get(k);
-            if v.is_undefined() {
-                return Ok(None);
-            }
-            let arr: Vec<f64> = serde_wasm_bindgen::from_value(v).map_err(|e| err(format!("tightGanTrain: {k}: {e}")))?;
+            let Some(v) = o.get(k) else { return Ok(None) };
+            let arr: Vec<f64> = serde_json::from_value(v.clone()).map_err(|e| err(format!("tightGanTrain: {k}: {e}")))?;
             if arr.is_empty() || arr.iter().any(|x| !(x.is_finite() && *x >= 0.0 && x.fract() == 0.0)) {
                 return Err(err(format!("tightGanTrain: {k} must be a non-empty array of non-negative integers, got {arr:?}")));
             }
@@ -691,18 +834,14 @@ pub fn tight_gan_train(
             opts.calib_seeds = s;
         }
         for (k, slot, lo, hi) in [("epochs", &mut opts.gan.epochs, 1usize, 1000usize), ("hidden", &mut opts.gan.hidden, 1, 128), ("window", &mut opts.gan.window, 2, 200)] {
-            let v = get(k);
-            if v.is_undefined() {
-                continue;
-            }
+            let Some(v) = o.get(k) else { continue };
             match v.as_f64() {
                 Some(x) if x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => *slot = x as usize,
-                _ => return Err(err(format!("tightGanTrain: {k} must be an integer in {lo}..={hi}, got {v:?}"))),
+                _ => return Err(err(format!("tightGanTrain: {k} must be an integer in {lo}..={hi}, got {v}"))),
             }
         }
-        let a = get("alpha");
-        if !a.is_undefined() {
-            opts.alpha = a.as_f64().filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| err(format!("tightGanTrain: alpha must be in (0, 1), got {a:?}")))?;
+        if let Some(a) = o.get("alpha") {
+            opts.alpha = a.as_f64().filter(|x| *x > 0.0 && *x < 1.0).ok_or_else(|| err(format!("tightGanTrain: alpha must be in (0, 1), got {a}")))?;
         }
     }
     let cb = on_progress.dyn_ref::<js_sys::Function>().cloned();
@@ -743,8 +882,9 @@ pub fn tight_gan_train(
 
 /// Parse a log into columns (for plotting): `{ format, columns: {name: Float64Array}, warnings, missing, meta }`.
 #[wasm_bindgen(js_name = readLog, unchecked_return_type = "LogColumns")]
-pub fn read_log(bytes: &[u8]) -> Result<JsValue, JsError> {
-    let log = logs::read_any(bytes).map_err(err)?;
+pub fn read_log(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue) -> Result<JsValue, JsError> {
+    let bytes = js_in::bytes(bytes, MAX_BYTES, "readLog: bytes").map_err(err)?;
+    let log = logs::read_any(&bytes).map_err(err)?;
     let cols = Object::new();
     let mut buf = vec![0.0; log.samples.len()];
     for (i, name) in COLUMNS.iter().enumerate() {
@@ -770,11 +910,13 @@ pub fn read_log(bytes: &[u8]) -> Result<JsValue, JsError> {
 
 /// Simulate a built-in scenario by name (see `scenarioNames()`) into navlog CSV text.
 #[wasm_bindgen]
-pub fn simulate(name: &str, seed: f64) -> Result<String, JsError> {
+pub fn simulate(#[wasm_bindgen(unchecked_param_type = "string")] name: &JsValue, #[wasm_bindgen(unchecked_param_type = "number")] seed: &JsValue) -> Result<String, JsError> {
+    let seed = js_in::num(seed, "simulate: seed").map_err(err)?;
+    let name = js_in::string(name, MAX_NAME, "simulate: name").map_err(err)?;
     if !(seed.is_finite() && seed >= 0.0 && seed.fract() == 0.0 && seed < 9.0e15) {
         return Err(err(format!("seed: must be a non-negative integer, got {seed}")));
     }
-    let sc = sim::Scenario::preset(name, seed as u64).map_err(err)?;
+    let sc = sim::Scenario::preset(&name, seed as u64).map_err(err)?;
     let rows = sim::simulate(&sc).map_err(err)?;
     Ok(sim::to_csv(&sc, &rows))
 }
@@ -782,7 +924,7 @@ pub fn simulate(name: &str, seed: f64) -> Result<String, JsError> {
 /// Simulate a scenario given as an object (same fields as the `# scenario:` CSV comment).
 #[wasm_bindgen(js_name = simulateScenario)]
 pub fn simulate_scenario(#[wasm_bindgen(unchecked_param_type = "object")] scenario: JsValue) -> Result<String, JsError> {
-    let sc: sim::Scenario = serde_wasm_bindgen::from_value(scenario).map_err(|e| err(format!("scenario: {e}")))?;
+    let sc: sim::Scenario = plain_of(&scenario, "scenario")?;
     let rows = sim::simulate(&sc).map_err(err)?;
     Ok(sim::to_csv(&sc, &rows))
 }
@@ -795,7 +937,16 @@ pub fn scenario_names() -> Array {
 
 /// Metrics over labelled rows (contract definitions).
 #[wasm_bindgen(unchecked_return_type = "Metrics")]
-pub fn metrics(t: &[f64], label: &[f64], status: &[u8]) -> Result<JsValue, JsError> {
+pub fn metrics(
+    #[wasm_bindgen(unchecked_param_type = "Float64Array | number[]")] t: &JsValue,
+    #[wasm_bindgen(unchecked_param_type = "Float64Array | number[]")] label: &JsValue,
+    #[wasm_bindgen(unchecked_param_type = "Uint8Array | number[]")] status: &JsValue,
+) -> Result<JsValue, JsError> {
+    let (mut tv, mut lv) = (Vec::new(), Vec::new());
+    js_in::f64s(t, MAX_VALUES, "metrics: t", &mut tv).map_err(err)?;
+    js_in::f64s(label, MAX_VALUES, "metrics: label", &mut lv).map_err(err)?;
+    let sv = js_in::bytes(status, MAX_VALUES, "metrics: status").map_err(err)?;
+    let (t, label, status) = (&tv[..], &lv[..], &sv[..]);
     if t.len() != label.len() || t.len() != status.len() {
         return Err(err(format!("metrics: lengths differ: t {}, label {}, status {}", t.len(), label.len(), status.len())));
     }
@@ -805,17 +956,23 @@ pub fn metrics(t: &[f64], label: &[f64], status: &[u8]) -> Result<JsValue, JsErr
 /// Train a model from labelled navlog CSV files (an array of `Uint8Array`).
 /// Pass the result as `config.model`.
 #[wasm_bindgen(js_name = trainFromCsv, unchecked_return_type = "NavguardModel")]
-pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] files: Array, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
+pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] files: JsValue, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
     let cfg = config_from(&config)?;
     let mut streams = vec![];
-    for (i, f) in files.iter().enumerate() {
-        let bytes = f.dyn_into::<Uint8Array>().map_err(|_| err(format!("trainFromCsv: file {i} must be a Uint8Array")))?;
-        let log = logs::csv::read_csv(&bytes.to_vec()).map_err(|e| err(format!("trainFromCsv: file {i}: {e}")))?;
+    for (i, f) in js_in::items(&files, 10_000, "trainFromCsv: files").map_err(err)?.iter().enumerate() {
+        let bytes = js_in::bytes(f, MAX_BYTES, &format!("trainFromCsv: file {i}")).map_err(err)?;
+        let log = logs::csv::read_csv(&bytes).map_err(|e| err(format!("trainFromCsv: file {i}: {e}")))?;
         streams.push(log.samples);
     }
     let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
     let model = Model::train(&refs, &cfg, 42).map_err(err)?;
     serde_wasm_bindgen::to_value(&model).map_err(err)
+}
+
+/// The wasm memory, for the package's `push` fast path; not an API.
+#[wasm_bindgen(js_name = __memory, unchecked_return_type = "WebAssembly.Memory")]
+pub fn memory() -> JsValue {
+    wasm_bindgen::memory()
 }
 
 /// Bytes of wasm linear memory (for memory-flatness checks).

@@ -8,14 +8,22 @@ use navguard::wasm::{metrics, read_log, simulate, Detector};
 use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::*;
 
+fn f64s(v: &[f64]) -> JsValue {
+    Float64Array::from(v).into()
+}
+
+fn u8s(v: &[u8]) -> JsValue {
+    Uint8Array::from(v).into()
+}
+
 fn get(o: &JsValue, k: &str) -> JsValue {
     Reflect::get(o, &JsValue::from_str(k)).unwrap()
 }
 
 /// Simulated scenario as columns (label split off).
 fn scenario(name: &str, seed: u64) -> (JsValue, Vec<f64>, Vec<f64>) {
-    let csv = simulate(name, seed as f64).unwrap();
-    let log = read_log(csv.as_bytes()).unwrap();
+    let csv = simulate(&name.into(), &(seed as f64).into()).unwrap();
+    let log = read_log(&u8s(csv.as_bytes())).unwrap();
     let cols = get(&log, "columns");
     let t = get(&cols, "t").dyn_into::<Float64Array>().unwrap().to_vec();
     let label = get(&cols, "label").dyn_into::<Float64Array>().unwrap().to_vec();
@@ -52,7 +60,7 @@ fn rate(m: &JsValue, k: &str) -> f64 {
 #[wasm_bindgen_test]
 fn paper_scenario_meets_the_papers_table1_at_tc100() {
     let (t, label, status) = run("paper", 1, config(&[("tc", 100.0)]));
-    let m = metrics(&t, &label, &status).unwrap();
+    let m = metrics(&f64s(&t), &f64s(&label), &u8s(&status)).unwrap();
     let (acc, far, mdr) = (rate(&m, "accuracy"), rate(&m, "falseAlarmRate"), rate(&m, "misdetectionRate"));
     web_sys_log(&format!("paper scenario TC=100: accuracy {acc:.4} (target 0.99), false alarm {far:.4} (target 0.05), misdetection {mdr:.4} (target 0.02)"));
     assert_eq!(rate(&m, "tp") + rate(&m, "fn"), 300.0, "300 labelled outage epochs");
@@ -64,7 +72,7 @@ fn paper_scenario_meets_the_papers_table1_at_tc100() {
 #[wasm_bindgen_test]
 fn silent_outages_are_flagged_on_every_row() {
     let (t, label, status) = run("paper-silent", 2, JsValue::UNDEFINED);
-    let m = metrics(&t, &label, &status).unwrap();
+    let m = metrics(&f64s(&t), &f64s(&label), &u8s(&status)).unwrap();
     assert_eq!(rate(&m, "detectedIntervals"), 3.0);
     assert!(rate(&m, "misdetectionRate") <= 0.02, "{}", rate(&m, "misdetectionRate"));
 }
@@ -75,7 +83,7 @@ fn every_fault_kind_is_detected() {
     for kind in ["step", "ramp", "noise", "frozen", "zero-velocity", "baro-stuck", "accel-bias"] {
         for seed in [1u64, 2] {
             let (t, label, status) = run(kind, seed, JsValue::UNDEFINED);
-            let m = metrics(&t, &label, &status).unwrap();
+            let m = metrics(&f64s(&t), &f64s(&label), &u8s(&status)).unwrap();
             assert_eq!(rate(&m, "detectedIntervals"), 1.0, "{kind} seed {seed} not detected");
         }
     }
@@ -168,9 +176,9 @@ fn snapshot_and_restore_resume_bit_identically() {
     let o1 = first.push_columns(&part(0, cut)).unwrap();
     let snap = first.snapshot().unwrap().to_vec();
     drop(first);
-    let info = navguard::wasm::snapshot_info(&snap).unwrap();
+    let info = navguard::wasm::snapshot_info(&u8s(&snap)).unwrap();
     assert_eq!(get(&info, "version").as_f64(), Some(navguard::snapshot::VERSION as f64));
-    let mut second = Detector::restore(&snap).unwrap();
+    let mut second = Detector::restore(&u8s(&snap)).unwrap();
     let o2 = second.push_columns(&part(cut, t.len() as u32)).unwrap();
     let mut st2 = get(&o1, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
     st2.extend(get(&o2, "status").dyn_into::<Uint8Array>().unwrap().to_vec());
@@ -183,7 +191,7 @@ fn snapshot_and_restore_resume_bit_identically() {
     // A damaged snapshot is an Error, not a panic.
     let mut bad = snap.clone();
     bad[snap.len() / 3] ^= 1;
-    let e: JsValue = Detector::restore(&bad).err().unwrap().into();
+    let e: JsValue = Detector::restore(&u8s(&bad)).err().unwrap().into();
     assert!(get(&e, "message").as_string().unwrap().contains("checksum"));
 }
 
@@ -199,7 +207,7 @@ fn every_method_streams_and_catches_a_step() {
         let out = det.push_columns(&cols).unwrap();
         let status = get(&out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
         let f = get(&out, "f").dyn_into::<Float64Array>().unwrap().to_vec();
-        let m = metrics(&t, &label, &status).unwrap();
+        let m = metrics(&f64s(&t), &f64s(&label), &u8s(&status)).unwrap();
         assert_eq!(rate(&m, "detectedIntervals"), 1.0, "{method}: step not detected");
         assert!(label.iter().zip(&f).all(|(l, f)| l.is_nan() || !f.is_nan()), "{method}: NaN score");
         assert_eq!(get(&det.config().unwrap(), "method").as_string().as_deref(), Some(method));
@@ -213,7 +221,7 @@ fn every_method_streams_and_catches_a_step() {
 #[wasm_bindgen_test]
 fn gan_fdsr_streams_and_names_the_stepped_satellite() {
     use navguard::wasm::{tight_gan_train, tight_simulate, TightDetectorJs};
-    let sim = tight_simulate(1, 1, 7.0).unwrap();
+    let sim = tight_simulate(&1.0.into(), &1.0.into(), &7.0.into()).unwrap();
     let cfg = get(&sim, "config");
     // `method` is another name for `strategy`: one of the two, not both.
     Reflect::delete_property(cfg.unchecked_ref::<Object>(), &"strategy".into()).unwrap();
@@ -222,7 +230,7 @@ fn gan_fdsr_streams_and_names_the_stepped_satellite() {
     let prn = get(&sim, "faultyPrn").as_f64().unwrap();
     let (start, end) = (get(&sim, "faultStart").as_f64().unwrap(), get(&sim, "faultEnd").as_f64().unwrap());
     let check = |mut det: TightDetectorJs, min_rate: f64| {
-        let out: js_sys::Array = det.push_csv(&csv).unwrap().dyn_into().unwrap();
+        let out: js_sys::Array = det.push_csv(&JsValue::from_str(&csv)).unwrap().dyn_into().unwrap();
         let (mut first, mut named, mut n) = (None, 0usize, 0usize);
         for o in out.iter() {
             let t = get(&o, "t").as_f64().unwrap();
@@ -246,7 +254,47 @@ fn gan_fdsr_streams_and_names_the_stepped_satellite() {
     let trained = tight_gan_train(opts.into(), JsValue::UNDEFINED).unwrap();
     let bytes = get(&trained, "model").dyn_into::<Uint8Array>().unwrap().to_vec();
     assert!(get(&trained, "t2").as_f64().is_some_and(|t| t.is_finite() && t > 0.0));
-    check(TightDetectorJs::with_gan_model(cfg, &bytes).unwrap(), 0.5);
+    check(TightDetectorJs::with_gan_model(cfg, &u8s(&bytes)).unwrap(), 0.5);
+}
+
+/// A JS value made by JS source (a Proxy with a throwing trap, a detached
+/// typed array: shapes Rust cannot make directly).
+fn js(body: &str) -> JsValue {
+    js_sys::Function::new_no_args(body).call0(&JsValue::UNDEFINED).unwrap()
+}
+
+/// Issue 17 items 2-4 through the facade itself (no package guard): a
+/// config Proxy whose trap throws, a detached column and a wrong `out` are
+/// Errors, 300 times each, and the same and a fresh detector then give
+/// exactly the outputs of detectors that never saw them.
+#[wasm_bindgen_test]
+fn hostile_arguments_are_errors_and_change_nothing() {
+    let (cols, _, _) = scenario("step", 3);
+    let status_f = |out: &JsValue| {
+        let st = get(out, "status").dyn_into::<Uint8Array>().unwrap().to_vec();
+        let f: Vec<u64> = get(out, "f").dyn_into::<Float64Array>().unwrap().to_vec().iter().map(|x| x.to_bits()).collect();
+        (st, f)
+    };
+    let reference = status_f(&Detector::new(JsValue::UNDEFINED).unwrap().push_columns(&cols).unwrap());
+    assert!(reference.0.iter().any(|s| *s == 1), "the compared run has faults");
+    let proxy = js("return new Proxy({}, { ownKeys() { throw new Error('trap'); } });");
+    let getter = js("return { get tc() { throw new Error('boom'); } };");
+    let detached = js("const a = new Float64Array(3); structuredClone(a.buffer, { transfer: [a.buffer] }); return { t: a };");
+    let mut det = Detector::new(JsValue::UNDEFINED).unwrap();
+    let row = f64s(&[f64::NAN; 26]);
+    for _ in 0..300 {
+        let e: JsValue = Detector::new(proxy.clone()).err().unwrap().into();
+        assert!(get(&e, "message").as_string().unwrap().contains("config: listing its fields threw: trap"));
+        let e: JsValue = Detector::new(getter.clone()).err().unwrap().into();
+        assert!(get(&e, "message").as_string().unwrap().contains("config.tc: reading it threw: boom"));
+        let e: JsValue = det.push_columns(&detached).err().unwrap().into();
+        assert!(get(&e, "message").as_string().unwrap().contains("column 't': unreadable"));
+        let e: JsValue = det.push_row_into(&row, &js_sys::Array::new().into()).err().unwrap().into();
+        assert!(get(&e, "message").as_string().unwrap().contains("out: must be a Float64Array"));
+    }
+    assert_eq!(det.row_count(), 0.0);
+    assert_eq!(status_f(&det.push_columns(&cols).unwrap()), reference);
+    assert_eq!(status_f(&Detector::new(JsValue::UNDEFINED).unwrap().push_columns(&cols).unwrap()), reference);
 }
 
 fn web_sys_log(s: &str) {
