@@ -776,7 +776,7 @@ impl Out {
     }
 
     fn out(att: &mut Option<(f64, [f64; 4])>, with_att: &mut u64, span: &mut Option<(f64, f64)>, item: Item, sink: &mut dyn RowSink) {
-        let mut row = match item {
+        let row = match item {
             Item::Att(t, q) => {
                 *att = Some((t, q));
                 return;
