@@ -5,14 +5,15 @@
 //   navguard report [--seed N] [--json] [--quick]
 //   navguard train LABELLED.csv [...] --out MODEL.json
 //   navguard compare [--seeds N] [--methods a,b] [--logs DIR] [--json] [--update-readme FILE]
-import { readFileSync, writeFileSync, statSync, readdirSync, openSync, readSync, writeSync, closeSync } from 'node:fs';
+import { readFileSync, writeFileSync, statSync, readdirSync, openSync, writeSync, closeSync } from 'node:fs';
 import { Worker } from 'node:worker_threads';
 import { availableParallelism } from 'node:os';
 import { createRequire } from 'node:module';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
-import { perSampleCsv, perSampleHeader, perSampleRows } from '../lib/csv.mjs';
+import { perSampleHeader, perSampleRows } from '../lib/csv.mjs';
+import { streamAudit } from '../lib/stream-audit.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
 
 const require = createRequire(import.meta.url);
@@ -53,43 +54,28 @@ function readConfig(path) {
   try { return JSON.parse(readFileSync(path, 'utf8')); } catch (e) { fail(`--config ${path}: ${e.message}`); }
 }
 
-const CHUNK = 4 << 20;
-
-/** True unless the file starts like a ULog or DataFlash log: navlog CSVs are
- * streamed, the binary formats are read whole. */
-function looksLikeCsv(fd) {
-  const head = Buffer.alloc(8);
-  const n = readSync(fd, head, 0, 8, 0);
-  if (n >= 7 && head.subarray(0, 7).equals(Buffer.from([0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35]))) return false;
-  if (n >= 2 && head[0] === 0xa3 && head[1] === 0x95) return false;
-  return true;
-}
-
-/** A navlog CSV in 4 MiB chunks: memory stays bounded whatever the file's
- * size; the per-sample file is written as the outputs come. */
-function auditCsvStream(file, fd, size, opt, config) {
-  const run = new ng.StreamAuditor(config, Boolean(opt['per-sample']));
+/** Any log streamed from disk in 4 MiB chunks (lib/stream-audit.mjs):
+ * memory stays bounded whatever the file's size and format; the per-sample
+ * file is written as the outputs come. */
+function auditStream(file, fd, size, opt, config) {
   let out = null;
   try {
     if (opt['per-sample']) {
       out = openSync(opt['per-sample'], 'w');
       writeSync(out, perSampleHeader());
     }
-    const buf = Buffer.alloc(CHUNK);
-    for (let pos = 0; ; ) {
-      const n = readSync(fd, buf, 0, CHUNK, pos);
-      if (n === 0) break;
-      pos += n;
-      run.feed(buf.subarray(0, n));
-      if (out !== null) writeSync(out, perSampleRows(run.outputs()));
-      progress(`auditing ${file}: ${(100 * pos / Math.max(1, size)).toFixed(0)}% of ${(size / 1e6).toFixed(1)} MB, ${run.rows()} rows`);
-    }
-    const res = run.finish();
+    const res = streamAudit(ng, fd, config, {
+      keepOutputs: out !== null,
+      onChunk(run, pos, pass) {
+        if (out !== null) writeSync(out, perSampleRows(run.outputs()));
+        const of = pass > 1 || run.format() === 'ulog' ? ` (pass ${pass} of 2)` : '';
+        progress(`auditing ${file}: ${(100 * pos / Math.max(1, size)).toFixed(0)}% of ${(size / 1e6).toFixed(1)} MB${of}, ${run.rows()} rows`);
+      },
+    });
     if (out !== null) writeSync(out, perSampleRows(res.columns));
     return res;
   } finally {
     if (out !== null) closeSync(out);
-    run.free();
   }
 }
 
@@ -100,22 +86,7 @@ function audit(file, opt) {
   progress(`auditing ${file} (${(size / 1e6).toFixed(1)} MB)...`);
   let res;
   try {
-    if (looksLikeCsv(fd)) {
-      res = auditCsvStream(file, fd, size, opt, config);
-    } else {
-      const bytes = readFileSync(fd);
-      // In slices, so a long audit shows its progress on a terminal.
-      const run = new ng.Auditor(bytes, config);
-      const rows = run.rows();
-      const slice = Math.max(20000, Math.ceil(rows / 100));
-      for (let done = 0; done < 1; ) {
-        done = run.step(slice);
-        progress(`auditing ${file}: ${(100 * done).toFixed(0)}% of ${rows} rows`);
-      }
-      res = run.finish();
-      run.free();
-      if (opt['per-sample']) writeFileSync(opt['per-sample'], perSampleCsv(res.columns));
-    }
+    res = auditStream(file, fd, size, opt, config);
   } catch (e) { progressDone(); fail(`${file}: ${e.message}`); } finally { closeSync(fd); }
   progressDone();
   const { report } = res;
@@ -142,16 +113,27 @@ function audit(file, opt) {
   console.log(L.join('\n'));
 }
 
-/** Audit every file in a folder in parallel (worker_threads), one summary. */
+/** Audit every file in a folder in parallel (worker_threads), one summary.
+ * Symlinks are followed; one that leads nowhere or to a folder is listed as
+ * unreadable rather than skipped without a word. */
 async function auditDir(dir, opt) {
-  const files = readdirSync(dir, { withFileTypes: true }).filter((d) => d.isFile()).map((d) => join(dir, d.name)).sort();
-  if (!files.length) fail(`${dir}: no files`);
+  const entries = readdirSync(dir, { withFileTypes: true }).filter((d) => d.isFile() || d.isSymbolicLink());
+  const files = [], broken = [];
+  for (const d of entries.sort((a, b) => a.name.localeCompare(b.name))) {
+    const p = join(dir, d.name);
+    if (d.isFile()) { files.push(p); continue; }
+    let st = null;
+    try { st = statSync(p); } catch (e) { broken.push({ file: p, error: `broken symlink (${e.code === 'ENOENT' ? 'target missing' : e.message})` }); continue; }
+    if (st.isFile()) files.push(p);
+    else broken.push({ file: p, error: `symlink to a ${st.isDirectory() ? 'folder' : 'non-file'}: not audited` });
+  }
+  if (!files.length && !broken.length) fail(`${dir}: no files`);
   const config = readConfig(opt.config);
   const jobs = Math.max(1, Math.min(Number(opt.jobs ?? availableParallelism()), files.length));
-  const results = [];
+  const results = [...broken];
   let next = 0, done = 0;
   const t0 = performance.now();
-  await new Promise((resolve) => {
+  if (files.length) await new Promise((resolve) => {
     const workers = Array.from({ length: jobs }, () => new Worker(new URL('../lib/audit-worker.mjs', import.meta.url)));
     const feed = (w) => {
       if (next < files.length) w.postMessage({ file: files[next++], config });
@@ -178,11 +160,11 @@ async function auditDir(dir, opt) {
     outages: r.report.faults.filter((f) => f.kind === 'gps_outage').length,
     dataGaps: r.report.dataGaps.length, warnings: r.report.warnings, missing: r.report.missing, ms: r.ms,
   });
-  const summary = { dir, files: files.length, failed: rows.filter((r) => r.error).length, wallMs: performance.now() - t0, jobs, logs: rows };
+  const summary = { dir, files: files.length + broken.length, failed: rows.filter((r) => r.error).length, wallMs: performance.now() - t0, jobs, logs: rows };
   const json = JSON.stringify(summary, (k, v) => (typeof v === 'number' && !Number.isFinite(v) ? null : v), 2);
   if (opt.summary) writeFileSync(opt.summary, json + '\n');
   if (opt.json) { console.log(json); return; }
-  console.log(`${dir}: ${files.length} files, ${summary.failed} unreadable, ${jobs} workers, ${(summary.wallMs / 1000).toFixed(2)} s`);
+  console.log(`${dir}: ${summary.files} files, ${summary.failed} unreadable, ${jobs} workers, ${(summary.wallMs / 1000).toFixed(2)} s`);
   console.log('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps');
   for (const r of rows) {
     const name = r.file.length > 48 ? '...' + r.file.slice(-45) : r.file;

@@ -148,6 +148,12 @@ impl DataflashStream {
         self.win.end()
     }
 
+    /// Bytes the reader holds now in its input window and reorder buffer:
+    /// what must not grow with the file.
+    pub fn held_bytes(&self) -> usize {
+        self.win.held_bytes() + self.out.emit.held_bytes()
+    }
+
     pub fn feed(&mut self, chunk: &[u8], sink: &mut dyn RowSink) {
         self.win.push(chunk);
         self.run(false, sink);

@@ -171,6 +171,15 @@ impl<T> Reorder<T> {
             self.late += 1;
             return;
         }
+        if self.heap.len() >= self.cap {
+            // Full: the smallest of what is held and the new item goes on.
+            if self.precedes_all(key.t, key.rank, key.seq) {
+                self.last = Some(key);
+                out(item);
+                return;
+            }
+            self.pop(out);
+        }
         let slot = match self.free.pop() {
             Some(i) => {
                 if let Some(s) = self.slots.get_mut(i as usize) {
@@ -179,14 +188,17 @@ impl<T> Reorder<T> {
                 i
             }
             None => {
+                // Grow by doubling, but never past the capacity.
+                if self.slots.len() == self.slots.capacity() {
+                    let more = self.slots.len().max(16).min(self.cap.saturating_sub(self.slots.len()).max(1));
+                    self.slots.reserve_exact(more);
+                    self.heap.reserve_exact(self.slots.capacity().saturating_sub(self.heap.len()));
+                }
                 self.slots.push(Some(item));
                 u32::try_from(self.slots.len() - 1).unwrap_or(u32::MAX)
             }
         };
         self.heap.push(Entry(key, slot));
-        if self.heap.len() > self.cap {
-            self.pop(out);
-        }
     }
 
     fn pop(&mut self, out: &mut impl FnMut(T)) -> bool {
@@ -204,6 +216,11 @@ impl<T> Reorder<T> {
     /// Hand on everything held (end of input).
     pub fn drain(&mut self, out: &mut impl FnMut(T)) {
         while self.pop(out) {}
+    }
+
+    /// Bytes held: item slots (used or free) and heap entries.
+    pub fn held_bytes(&self) -> usize {
+        self.slots.capacity() * core::mem::size_of::<Option<T>>() + self.heap.capacity() * core::mem::size_of::<Entry>() + self.free.capacity() * 4
     }
 
     /// Items held now.
@@ -229,6 +246,11 @@ struct Window {
 impl Window {
     fn push(&mut self, chunk: &[u8]) {
         self.buf.extend_from_slice(chunk);
+    }
+
+    /// Bytes allocated for the window.
+    fn held_bytes(&self) -> usize {
+        self.buf.capacity()
     }
 
     /// Absolute end of the bytes held.

@@ -177,6 +177,13 @@ impl UlogStream {
         self.win.end()
     }
 
+    /// Bytes the reader holds now in its input window and reorder buffer
+    /// (not counting formats and metadata, which are capped): what must
+    /// not grow with the file.
+    pub fn held_bytes(&self) -> usize {
+        self.win.held_bytes() + self.p.emit.reorder.held_bytes()
+    }
+
     /// True for the first pass (no rows yet).
     pub fn is_planning(&self) -> bool {
         self.plan.is_none()
