@@ -10,7 +10,7 @@
 // - dataflash: a ~150 MB DataFlash log of 11-byte IMU messages (TimeUS only)
 //              plus a GPS message every 100th: 13 M rows;
 // then runs `navguard audit` on each under /usr/bin/time -v: single file
-// (`audit FILE --json`, CSV also with `--per-sample`), a folder holding it
+// (`audit FILE --json`, CSVs also with `--per-sample`), a folder holding it
 // (`audit DIR --json`, through a symlink) and a folder holding two symlinks
 // to it with `--jobs 2`. Prints a table of peak RSS (the whole process: main
 // thread and workers), time and rows, and exits 1 if any peak exceeds the
@@ -146,7 +146,7 @@ const cli = join(root, 'pkg', 'bin', 'navguard.mjs');
 function run(args) {
   const r = spawnSync('/usr/bin/time', ['-v', process.execPath, cli, ...args], { encoding: 'utf8', maxBuffer: 1 << 28 });
   const peak = Number(/Maximum resident set size \(kbytes\): (\d+)/.exec(r.stderr)?.[1] ?? NaN) / 1024;
-  const wall = /Elapsed \(wall clock\) time[^:]*: (.*)/.exec(r.stderr)?.[1] ?? '?';
+  const wall = /Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (.*)/.exec(r.stderr)?.[1] ?? '?';
   const [a, b, c] = wall.split(':').map(Number);
   const wallS = c === undefined ? a * 60 + b : a * 3600 + b * 60 + c;
   if (r.status !== 0) throw new Error(`navguard ${args.join(' ')}: exit ${r.status}\n${r.stderr}`);
@@ -154,10 +154,10 @@ function run(args) {
 }
 
 const cases = [
-  ['csv', 'big.csv', () => writeCsv(join(dir, 'big.csv'), csvMb)],
-  ['csv-short', 'short.csv', () => writeShortCsv(join(dir, 'short.csv'), 10_000_000)],
   ['ulog', 'tiny.ulg', () => writeUlog(join(dir, 'tiny.ulg'), binMb)],
   ['dataflash', 'tiny.bin', () => writeDataflash(join(dir, 'tiny.bin'), binMb)],
+  ['csv-short', 'short.csv', () => writeShortCsv(join(dir, 'short.csv'), 10_000_000)],
+  ['csv', 'big.csv', () => writeCsv(join(dir, 'big.csv'), csvMb)],
 ].filter(([name]) => !only || only.includes(name));
 
 const table = [];
@@ -175,7 +175,7 @@ try {
     symlinkSync(file, join(two, `a-${base}`));
     symlinkSync(file, join(two, `b-${base}`));
     const modes = [['single', [file, '--json']]];
-    if (name === 'csv') modes.push(['single --per-sample', [file, '--json', '--per-sample', join(dir, 'per-sample.csv')]]);
+    if (name.startsWith('csv')) modes.push(['single --per-sample', [file, '--json', '--per-sample', join(dir, 'per-sample.csv')]]);
     modes.push(['DIR', [one, '--json']], ['DIR --jobs 2', [two, '--json', '--jobs', '2']]);
     for (const [mode, args] of modes) {
       const r = run(['audit', ...args]);

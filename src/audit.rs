@@ -529,10 +529,15 @@ fn not_csv(r: &CsvReader, e: String) -> String {
 /// passes for ULog): the same report as [`audit`] of [`read_any`](crate::logs::read_any),
 /// without holding the parsed rows. With `keep_outputs`, every row's outputs.
 pub fn audit_bytes(bytes: &[u8], cfg: &Config, keep_outputs: bool) -> Result<(Report, Columns), String> {
+    audit_chunks(bytes, cfg, keep_outputs, FEED_CHUNK)
+}
+
+/// [`audit_bytes`] fed `chunk` bytes at a time (any size gives the same result).
+pub fn audit_chunks(bytes: &[u8], cfg: &Config, keep_outputs: bool, chunk: usize) -> Result<(Report, Columns), String> {
     let mut run = StreamAudit::new(cfg, keep_outputs)?;
     let mut all = Columns::default();
     loop {
-        for c in bytes.chunks(FEED_CHUNK) {
+        for c in bytes.chunks(chunk.max(1)) {
             run.feed(c)?;
             all.append(run.outputs());
         }

@@ -5,29 +5,11 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use navguard::audit::{Columns, StreamAudit};
 use navguard::{audit, logs, Config};
-
-fn streamed(data: &[u8], step: usize) -> Result<(audit::Report, Columns), String> {
-    let mut run = StreamAudit::new(&Config::default(), true)?;
-    let mut all = Columns::default();
-    loop {
-        for c in data.chunks(step) {
-            run.feed(c)?;
-            all.append(run.outputs());
-        }
-        if !run.end_pass()? {
-            break;
-        }
-    }
-    let (rep, last) = run.finish()?;
-    all.append(&last);
-    Ok((rep, all))
-}
 
 fuzz_target!(|data: &[u8]| {
     let step = 1 + usize::from(data.last().copied().unwrap_or(0) % 64);
-    let s = streamed(data, step);
+    let s = audit::audit_chunks(data, &Config::default(), true, step);
     let Ok(log) = logs::read_any(data) else {
         // A CSV error may come later in the stream than in the whole read
         // (rows before it are audited), but it must come.

@@ -6,18 +6,12 @@
 
 use libfuzzer_sys::fuzz_target;
 use navguard::logs::{ulog, NoRows};
-use navguard::sample::{Sample, COLUMNS};
 
-fn bits(rows: &[Sample]) -> Vec<u64> {
-    rows.iter().flat_map(|s| (0..COLUMNS.len()).map(|i| s.get(i).to_bits())).collect()
-}
+#[path = "common/same.rs"]
+mod common;
 
 fuzz_target!(|data: &[u8]| {
     let whole = ulog::read_ulog(data);
-    if let Ok(d) = &whole {
-        assert_eq!(d.format, "ulog");
-        assert!(d.samples.windows(2).all(|w| !(w[1].t < w[0].t)), "samples not sorted by t");
-    }
     // Chunk size from the last byte: 1..=64 bytes, so messages, headers and
     // sync markers are split at every offset over the corpus.
     let step = 1 + usize::from(data.last().copied().unwrap_or(0) % 64);
@@ -32,15 +26,5 @@ fuzz_target!(|data: &[u8]| {
         }
         s2.finish(&mut rows)
     });
-    match (whole, streamed) {
-        (Ok(d), Ok(sum)) => {
-            assert_eq!(bits(&d.samples), bits(&rows), "rows differ with {step}-byte chunks");
-            assert_eq!(d.meta, sum.meta);
-            assert_eq!(d.warnings, sum.warnings);
-            assert_eq!(d.topic_counts, sum.topic_counts);
-            assert_eq!(d.missing, sum.missing);
-        }
-        (Err(a), Err(b)) => assert_eq!(a, b),
-        (a, b) => panic!("whole {:?} vs streamed {:?}", a.err(), b.err()),
-    }
+    common::same(whole, streamed, &rows, step);
 });
