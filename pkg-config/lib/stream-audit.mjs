@@ -5,6 +5,10 @@
 import { readSync } from 'node:fs';
 
 export const CHUNK = 4 << 20;
+/** With per-row outputs, smaller chunks: each chunk's outputs become a JS
+ * string (about 100 bytes a row), and a 4 MiB chunk of 20-byte CSV rows
+ * would be 200,000 rows, 20 MB of short-lived strings per call. */
+export const OUTPUT_CHUNK = 256 << 10;
 
 /**
  * Audit the open file `fd`. `onChunk(run, pos, pass)` is called after each
@@ -13,11 +17,12 @@ export const CHUNK = 4 << 20;
  */
 export function streamAudit(ng, fd, config, { keepOutputs = false, onChunk } = {}) {
   const run = new ng.StreamAuditor(config, keepOutputs);
+  const size = keepOutputs ? OUTPUT_CHUNK : CHUNK;
   try {
-    const buf = Buffer.alloc(CHUNK);
+    const buf = Buffer.alloc(size);
     for (let pass = 1; ; pass++) {
       for (let pos = 0; ; ) {
-        const n = readSync(fd, buf, 0, CHUNK, pos);
+        const n = readSync(fd, buf, 0, size, pos);
         if (n === 0) break;
         pos += n;
         run.feed(buf.subarray(0, n));
