@@ -312,3 +312,52 @@ pub enum Format {
     Ulog,
     Dataflash,
 }
+
+#[cfg(all(test, not(target_arch = "wasm32")))]
+mod tests {
+    use super::*;
+
+    /// Items at most `cap` places out of order come out exactly as a stable
+    /// sort by (time, rank) puts them; one later than that is counted late.
+    #[test]
+    fn reorder_equals_a_stable_sort_within_its_capacity() {
+        let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+        let mut rnd = move |n: u64| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x % n
+        };
+        for cap in [1usize, 2, 7, 64] {
+            // Sorted (time, rank) pairs with many ties, shuffled within
+            // blocks of `cap`: no item is `cap` or more places out of order.
+            let mut keys: Vec<(f64, u8)> = (0..2000).map(|i| ((i / 5) as f64, rnd(3) as u8)).collect();
+            keys.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            for block in keys.chunks_mut(cap) {
+                for i in (1..block.len()).rev() {
+                    block.swap(i, rnd(i as u64 + 1) as usize);
+                }
+            }
+            let items: Vec<(f64, u8, usize)> = keys.iter().enumerate().map(|(i, k)| (k.0, k.1, i)).collect();
+            let mut want = items.clone();
+            want.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let mut r = Reorder::new(cap);
+            let mut got = Vec::new();
+            for it in &items {
+                r.push(it.0, it.1, *it, &mut |v| got.push(v));
+            }
+            r.drain(&mut |v| got.push(v));
+            assert_eq!(r.late, 0, "cap {cap}");
+            assert_eq!(got, want, "cap {cap}");
+            assert!(r.slots.capacity() <= cap.max(16), "cap {cap}: {} slots", r.slots.capacity());
+        }
+        let mut r = Reorder::new(2);
+        let mut got = Vec::new();
+        for t in [5.0, 6.0, 7.0, 1.0, 8.0] {
+            r.push(t, 0, t, &mut |v| got.push(v));
+        }
+        r.drain(&mut |v| got.push(v));
+        assert_eq!(got, [5.0, 6.0, 7.0, 8.0]);
+        assert_eq!(r.late, 1);
+    }
+}
