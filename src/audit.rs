@@ -409,7 +409,7 @@ impl StreamAudit {
             self.src = match format {
                 Format::Csv => Source::Csv(CsvReader::new()),
                 Format::Ulog => Source::Ulog(Box::new(UlogStream::plan())),
-                Format::Dataflash => Source::Dataflash(Box::new(DataflashStream::new())),
+                Format::Dataflash => Source::Dataflash(Box::default()),
             };
             return self.feed_inner(&head, at_end);
         }
