@@ -8,7 +8,9 @@ use crate::config::Config;
 use crate::detector::{kind, Detector, Output};
 use crate::indicators::DRIVER_NAMES;
 use crate::logs::csv::CsvReader;
-use crate::logs::LogData;
+use crate::logs::dataflash::DataflashStream;
+use crate::logs::ulog::UlogStream;
+use crate::logs::{sniff, Format, LogData, LogSummary, RowSink, FEED_CHUNK};
 use crate::metrics::{self, Metrics};
 use crate::sample::Sample;
 
@@ -236,6 +238,28 @@ impl Columns {
         }
     }
 
+    /// Append another set of outputs.
+    pub fn append(&mut self, o: &Columns) {
+        self.t.extend_from_slice(&o.t);
+        self.status.extend_from_slice(&o.status);
+        self.f.extend_from_slice(&o.f);
+        self.r.extend_from_slice(&o.r);
+        self.c.extend_from_slice(&o.c);
+        self.kind.extend_from_slice(&o.kind);
+        for (a, b) in self.resid.iter_mut().zip(&o.resid) {
+            a.extend_from_slice(b);
+        }
+    }
+
+    /// Rows held.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+
     /// Empty, keeping the capacity.
     pub fn clear(&mut self) {
         self.t.clear();
@@ -307,15 +331,51 @@ pub fn audit(log: &LogData, cfg: &Config) -> Result<(Report, Columns), String> {
     Ok(AuditRun::new(log, cfg)?.finish())
 }
 
-/// A navlog CSV audited as it streams in, chunk by chunk, in bounded memory
-/// (a 1 GB file never sits in memory whole): the CSV reader is incremental,
-/// and per-row outputs are kept only for the latest chunk ([`StreamAudit::outputs`],
-/// e.g. for a per-sample file written alongside). The report equals
-/// [`audit`]'s on the same bytes.
+/// Most CSV bytes parsed at once: bounds the rows held between the reader
+/// and the detector (a 4 MiB chunk of 4-byte rows would be 1 M rows, 208 MB).
+const CSV_SLICE: usize = 64 << 10;
+
+/// The reader a [`StreamAudit`] feeds, chosen from the first bytes.
+enum Source {
+    /// Not enough bytes yet to tell the format (fewer than 7).
+    Sniff(Vec<u8>),
+    Csv(CsvReader),
+    Ulog(Box<UlogStream>),
+    Dataflash(Box<DataflashStream>),
+}
+
+/// The detector end of a streaming reader: every row is audited as it comes.
+struct Feed<'a> {
+    tally: &'a mut Tally,
+    out: &'a mut Columns,
+    keep_outputs: bool,
+}
+
+impl RowSink for Feed<'_> {
+    fn row(&mut self, s: &Sample) {
+        let i = self.tally.rows as u64 + self.tally.bad_rows;
+        if let Some(o) = self.tally.push(s, i) {
+            if self.keep_outputs {
+                self.out.push(&o, &self.tally.det.residuals());
+            }
+        }
+    }
+}
+
+/// A log audited as it streams in, chunk by chunk, in bounded memory (a
+/// 1 GB file never sits in memory whole): navlog CSV, ULog or DataFlash,
+/// recognised by content. The readers are incremental, and per-row outputs
+/// are kept only for the latest chunk ([`StreamAudit::outputs`], e.g. for a
+/// per-sample file written alongside). The report equals [`audit`]'s on the
+/// same bytes.
+///
+/// A ULog file is read twice (its first pass finds which topics have data):
+/// after the last chunk, call [`StreamAudit::end_pass`]; when it returns
+/// true, feed the same bytes again from the start, then call it again.
 pub struct StreamAudit {
-    reader: CsvReader,
+    src: Source,
     tally: Tally,
-    /// Rows parsed from the current chunk (reused).
+    /// Rows parsed from the current CSV slice (reused).
     rows: Vec<Sample>,
     out: Columns,
     keep_outputs: bool,
@@ -325,39 +385,84 @@ pub struct StreamAudit {
 impl StreamAudit {
     /// `keep_outputs`: collect each chunk's per-row outputs.
     pub fn new(cfg: &Config, keep_outputs: bool) -> Result<Self, String> {
-        Ok(StreamAudit { reader: CsvReader::new(), tally: Tally::new(cfg, vec![])?, rows: Vec::new(), out: Columns::default(), keep_outputs, bytes: 0 })
+        Ok(StreamAudit { src: Source::Sniff(Vec::new()), tally: Tally::new(cfg, vec![])?, rows: Vec::new(), out: Columns::default(), keep_outputs, bytes: 0 })
     }
 
     /// Feed the next chunk of the file (any size, any split). Returns the
-    /// rows completed by it. A malformed line is an error naming it, as in
-    /// [`crate::logs::csv::read_csv`].
+    /// rows completed by it. A malformed CSV line is an error naming it, as
+    /// in [`crate::logs::csv::read_csv`].
     pub fn feed(&mut self, chunk: &[u8]) -> Result<usize, String> {
         self.bytes += chunk.len() as u64;
-        self.rows.clear();
-        let r = self.reader.feed(chunk, &mut self.rows);
-        r.map_err(|e| self.not_csv(e))?;
-        Ok(self.drain())
+        self.out.clear();
+        let before = self.tally.rows as u64 + self.tally.bad_rows;
+        self.feed_inner(chunk, false)?;
+        Ok((self.tally.rows as u64 + self.tally.bad_rows - before) as usize)
     }
 
-    fn drain(&mut self) -> usize {
-        self.out.clear();
-        let base = self.tally.rows as u64 + self.tally.bad_rows;
-        for (k, s) in self.rows.iter().enumerate() {
-            if let Some(o) = self.tally.push(s, base + k as u64) {
-                if self.keep_outputs {
-                    self.out.push(&o, &self.tally.det.residuals());
+    fn feed_inner(&mut self, chunk: &[u8], at_end: bool) -> Result<(), String> {
+        if let Source::Sniff(head) = &mut self.src {
+            head.extend_from_slice(chunk);
+            let Some(format) = sniff(head, at_end) else {
+                return Ok(());
+            };
+            let head = core::mem::take(head);
+            self.src = match format {
+                Format::Csv => Source::Csv(CsvReader::new()),
+                Format::Ulog => Source::Ulog(Box::new(UlogStream::plan())),
+                Format::Dataflash => Source::Dataflash(Box::default()),
+            };
+            return self.feed_inner(&head, at_end);
+        }
+        let mut feed = Feed { tally: &mut self.tally, out: &mut self.out, keep_outputs: self.keep_outputs };
+        match &mut self.src {
+            Source::Sniff(_) => {}
+            Source::Ulog(r) => r.feed(chunk, &mut feed),
+            Source::Dataflash(r) => r.feed(chunk, &mut feed),
+            Source::Csv(r) => {
+                for slice in chunk.chunks(CSV_SLICE) {
+                    self.rows.clear();
+                    let res = r.feed(slice, &mut self.rows);
+                    res.map_err(|e| not_csv(r, e))?;
+                    for s in &self.rows {
+                        feed.row(s);
+                    }
                 }
             }
         }
-        self.rows.len()
+        Ok(())
     }
 
-    /// An error before the header says what the file is not, as [`read_any`](crate::logs::read_any) does.
-    fn not_csv(&self, e: String) -> String {
-        if self.reader.has_header() {
-            e
-        } else {
-            format!("not a ULog or DataFlash log, and not a navlog CSV: {e}")
+    /// The format, once the first bytes are in.
+    pub fn format(&self) -> Option<&'static str> {
+        match self.src {
+            Source::Sniff(_) => None,
+            Source::Csv(_) => Some("csv"),
+            Source::Ulog(_) => Some("ulog"),
+            Source::Dataflash(_) => Some("dataflash"),
+        }
+    }
+
+    /// End of one pass over the file. `Ok(true)`: feed the same bytes again
+    /// from the start (the second pass over a ULog file); `Ok(false)`: call
+    /// [`StreamAudit::finish`]. Err when the file cannot be read.
+    pub fn end_pass(&mut self) -> Result<bool, String> {
+        self.out.clear();
+        self.feed_inner(&[], true)?;
+        let Source::Ulog(r) = &mut self.src else {
+            return Ok(false);
+        };
+        if !r.is_planning() {
+            return Ok(false);
+        }
+        let first = core::mem::replace(r.as_mut(), UlogStream::plan());
+        **r = first.second_pass()?;
+        Ok(true)
+    }
+
+    fn drain(&mut self) {
+        let mut feed = Feed { tally: &mut self.tally, out: &mut self.out, keep_outputs: self.keep_outputs };
+        for s in &self.rows {
+            feed.row(s);
         }
     }
 
@@ -366,7 +471,7 @@ impl StreamAudit {
         &self.out
     }
 
-    /// Bytes fed so far.
+    /// Bytes fed so far (over all passes).
     pub fn bytes(&self) -> u64 {
         self.bytes
     }
@@ -376,20 +481,73 @@ impl StreamAudit {
         self.tally.rows
     }
 
-    /// End of input: the report, and the outputs of the last line if it had
-    /// no newline (when `keep_outputs`).
+    /// End of input: the report, and the outputs of the rows completed by
+    /// the end (a last CSV line without a newline, the rows a binary reader
+    /// still held) when `keep_outputs`.
     pub fn finish(mut self) -> Result<(Report, Columns), String> {
-        self.rows.clear();
-        let r = self.reader.finish(&mut self.rows);
-        r.map_err(|e| self.not_csv(e))?;
-        self.drain();
-        let missing = self.tally.missing();
-        let meta = self.reader.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
-        let mut warnings = core::mem::take(&mut self.reader.warnings);
+        self.out.clear();
+        self.feed_inner(&[], true)?;
+        let summary = match core::mem::replace(&mut self.src, Source::Sniff(Vec::new())) {
+            Source::Sniff(_) => return Err("not a ULog or DataFlash log, and not a navlog CSV: no header row found (empty file or only comments)".into()),
+            Source::Csv(mut r) => {
+                self.rows.clear();
+                let res = r.finish(&mut self.rows);
+                res.map_err(|e| not_csv(&r, e))?;
+                self.drain();
+                let meta = r.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
+                LogSummary { format: "csv", meta, warnings: core::mem::take(&mut r.warnings), missing: self.tally.missing(), topic_counts: vec![] }
+            }
+            Source::Ulog(r) => {
+                if r.is_planning() {
+                    return Err("ULog input is read in two passes: call end_pass() after the first and feed the file again".into());
+                }
+                let mut feed = Feed { tally: &mut self.tally, out: &mut self.out, keep_outputs: self.keep_outputs };
+                r.finish(&mut feed)?
+            }
+            Source::Dataflash(r) => {
+                let mut feed = Feed { tally: &mut self.tally, out: &mut self.out, keep_outputs: self.keep_outputs };
+                r.finish(&mut feed)?
+            }
+        };
+        let LogSummary { format, meta, mut warnings, missing, .. } = summary;
         warnings.append(&mut self.tally.warnings);
         self.tally.warnings = warnings;
-        Ok((self.tally.report("csv", missing, meta), self.out))
+        Ok((self.tally.report(format, missing, meta), self.out))
     }
+}
+
+/// An error before the header says what the file is not, as [`read_any`](crate::logs::read_any) does.
+fn not_csv(r: &CsvReader, e: String) -> String {
+    if r.has_header() {
+        e
+    } else {
+        format!("not a ULog or DataFlash log, and not a navlog CSV: {e}")
+    }
+}
+
+/// Audit a whole file held in memory through the streaming path (both
+/// passes for ULog): the same report as [`audit`] of [`read_any`](crate::logs::read_any),
+/// without holding the parsed rows. With `keep_outputs`, every row's outputs.
+pub fn audit_bytes(bytes: &[u8], cfg: &Config, keep_outputs: bool) -> Result<(Report, Columns), String> {
+    audit_chunks(bytes, cfg, keep_outputs, FEED_CHUNK)
+}
+
+/// [`audit_bytes`] fed `chunk` bytes at a time (any size gives the same result).
+pub fn audit_chunks(bytes: &[u8], cfg: &Config, keep_outputs: bool, chunk: usize) -> Result<(Report, Columns), String> {
+    let mut run = StreamAudit::new(cfg, keep_outputs)?;
+    let mut all = Columns::default();
+    loop {
+        for c in bytes.chunks(chunk.max(1)) {
+            run.feed(c)?;
+            all.append(run.outputs());
+        }
+        if !run.end_pass()? {
+            break;
+        }
+    }
+    let (report, last) = run.finish()?;
+    all.append(&last);
+    Ok((report, all))
 }
 
 fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Output, det: &Detector) {

@@ -504,12 +504,13 @@ fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue
 
 /// Audit a whole log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised
 /// by content). Returns `{ report, columns: { t, status, f, r, c, kind, rPn..rBaro } }`.
+/// Runs the streaming readers over the bytes: the parsed rows are never held,
+/// only the per-row outputs returned.
 #[wasm_bindgen(js_name = auditBytes, unchecked_return_type = "AuditResult")]
 pub fn audit_bytes(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<JsValue, JsError> {
     let cfg = config_from(&config)?;
     let bytes = js_in::bytes(bytes, MAX_BYTES, "auditBytes: bytes").map_err(err)?;
-    let log = logs::read_any(&bytes).map_err(err)?;
-    let (report, cols) = audit::audit(&log, &cfg).map_err(err)?;
+    let (report, cols) = audit::audit_bytes(&bytes, &cfg, true).map_err(err)?;
     audit_result(&report, &cols)
 }
 
@@ -560,10 +561,13 @@ impl Auditor {
     }
 }
 
-/// A navlog CSV audited as it streams in, in bounded memory (for files too
-/// large to hold whole): `feed(chunk)` any number of times, then `finish()`
-/// for the report (the same as `auditBytes` gives on the whole file). With
-/// `keepOutputs`, `outputs()` holds the per-row outputs of the latest chunk.
+/// A log (navlog CSV, ULog or DataFlash, recognised by content) audited as it
+/// streams in, in bounded memory (for files too large to hold whole):
+/// `feed(chunk)` the whole file, then `endPass()`; while it returns true (a
+/// ULog file is read twice), feed the same bytes again from the start and
+/// call it again; then `finish()` for the report (the same as `auditBytes`
+/// gives on the whole file). With `keepOutputs`, `outputs()` holds the
+/// per-row outputs of the latest chunk.
 #[wasm_bindgen]
 pub struct StreamAuditor {
     run: Option<audit::StreamAudit>,
@@ -587,6 +591,19 @@ impl StreamAuditor {
         Ok(run.feed(&chunk).map_err(err)? as f64)
     }
 
+    /// End of one pass over the file: true when the same bytes must be fed
+    /// again from the start (the second pass over a ULog file).
+    #[wasm_bindgen(js_name = endPass)]
+    pub fn end_pass(&mut self) -> Result<bool, JsError> {
+        let run = self.run.as_mut().ok_or_else(|| err("StreamAuditor.endPass: already finished"))?;
+        run.end_pass().map_err(err)
+    }
+
+    /// "csv", "ulog" or "dataflash" once the first bytes are in, else undefined.
+    pub fn format(&self) -> Option<String> {
+        self.run.as_ref().and_then(|r| r.format()).map(str::to_string)
+    }
+
     /// Per-row outputs `{ t, status, f, r, c, kind, rPn..rBaro }` of the latest chunk.
     #[wasm_bindgen(unchecked_return_type = "AuditResult['columns']")]
     pub fn outputs(&self) -> JsValue {
@@ -604,7 +621,8 @@ impl StreamAuditor {
     }
 
     /// End of input: `{ report, columns }`, the columns holding the outputs
-    /// of a last unterminated line, if any.
+    /// of the rows completed at the end (a last unterminated CSV line, the
+    /// rows a binary reader still held in its reorder buffer).
     #[wasm_bindgen(unchecked_return_type = "AuditResult")]
     pub fn finish(&mut self) -> Result<JsValue, JsError> {
         let run = self.run.take().ok_or_else(|| err("StreamAuditor.finish: already finished"))?;

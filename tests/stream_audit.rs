@@ -1,7 +1,8 @@
-//! The streamed (chunked, bounded-memory) CSV audit gives the same report and
-//! per-row outputs as the whole-file audit, whatever the chunk boundaries.
+//! The streamed (chunked, bounded-memory) audit gives the same report and
+//! per-row outputs as the whole-file audit, whatever the chunk boundaries,
+//! for navlog CSV, ULog and DataFlash.
 
-use navguard::audit::{audit, Columns, StreamAudit};
+use navguard::audit::{audit, audit_bytes, Columns, StreamAudit};
 use navguard::logs::read_any;
 use navguard::sim::{simulate, to_csv, Scenario};
 use navguard::Config;
@@ -16,29 +17,23 @@ fn whole(bytes: &[u8], cfg: &Config) -> (serde_json::Value, Columns) {
 fn streamed(bytes: &[u8], cfg: &Config, sizes: &[usize]) -> (serde_json::Value, Columns) {
     let mut run = StreamAudit::new(cfg, true).unwrap();
     let mut all = Columns::default();
-    let append = |all: &mut Columns, c: &Columns| {
-        all.t.extend(&c.t);
-        all.status.extend(&c.status);
-        all.f.extend(&c.f);
-        all.r.extend(&c.r);
-        all.c.extend(&c.c);
-        all.kind.extend(&c.kind);
-        for k in 0..7 {
-            all.resid[k].extend(&c.resid[k]);
+    loop {
+        let mut pos = 0;
+        for size in sizes.iter().cycle() {
+            if pos >= bytes.len() {
+                break;
+            }
+            let end = (pos + size).min(bytes.len());
+            run.feed(&bytes[pos..end]).unwrap();
+            all.append(run.outputs());
+            pos = end;
         }
-    };
-    let mut pos = 0;
-    for size in sizes.iter().cycle() {
-        if pos >= bytes.len() {
+        if !run.end_pass().unwrap() {
             break;
         }
-        let end = (pos + size).min(bytes.len());
-        run.feed(&bytes[pos..end]).unwrap();
-        append(&mut all, run.outputs());
-        pos = end;
     }
     let (rep, last) = run.finish().unwrap();
-    append(&mut all, &last);
+    all.append(&last);
     (serde_json::to_value(&rep).unwrap(), all)
 }
 
@@ -96,4 +91,41 @@ fn bad_rows_and_bad_lines_stream_like_whole_files() {
     assert!(e.contains("line 3") && e.contains("abc"), "{e}");
     let e = StreamAudit::new(&cfg, false).unwrap().finish().err().unwrap();
     assert!(e.contains("no header"), "{e}");
+}
+
+/// Every shared flight log (ULog, DataFlash, CSV): streamed in odd chunks and
+/// through `audit_bytes`, the report and every output equal the whole-file
+/// audit's. (Bit-identical verdicts are what `audit DIR` and the CLI promise.)
+#[test]
+fn streamed_equals_whole_on_every_shared_log() {
+    let cfg = Config::default();
+    let mut n = 0;
+    for dir in ["../shared/data/px4", "../shared/data/ardupilot", "../shared/data/csv"] {
+        for e in std::fs::read_dir(dir).expect("shared data") {
+            let path = e.unwrap().path();
+            let bytes = std::fs::read(&path).unwrap();
+            let (rw, cw) = whole(&bytes, &cfg);
+            assert!(cw.t.len() > 50, "{path:?}");
+            for sizes in [&[3, 65_537, 1000][..], &[1 << 20][..]] {
+                let (rs, cs) = streamed(&bytes, &cfg, sizes);
+                assert_eq!(rs, rw, "{path:?} chunks {sizes:?}");
+                same_columns(&cs, &cw);
+            }
+            let (rb, cb) = audit_bytes(&bytes, &cfg, true).unwrap();
+            assert_eq!(serde_json::to_value(&rb).unwrap(), rw, "{path:?}");
+            same_columns(&cb, &cw);
+            n += 1;
+        }
+    }
+    assert_eq!(n, 13);
+}
+
+#[test]
+fn a_ulog_stream_needs_its_second_pass() {
+    let bytes = std::fs::read("../shared/data/px4/sample_log_small.ulg").expect("shared data");
+    let mut run = StreamAudit::new(&Config::default(), false).unwrap();
+    run.feed(&bytes).unwrap();
+    assert_eq!(run.rows(), 0, "the first pass only plans");
+    let e = run.finish().err().unwrap();
+    assert!(e.contains("two passes"), "{e}");
 }

@@ -5,14 +5,15 @@
 //   navguard report [--seed N] [--json] [--quick]
 //   navguard train LABELLED.csv [...] --out MODEL.json
 //   navguard compare [--seeds N] [--methods a,b] [--logs DIR] [--json] [--update-readme FILE]
-import { readFileSync, statSync, readdirSync, readSync, closeSync } from 'node:fs';
+import { readFileSync, statSync, closeSync } from 'node:fs';
 import { Worker } from 'node:worker_threads';
 import { availableParallelism } from 'node:os';
 import { createRequire } from 'node:module';
 import { dirname, join } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
-import { perSampleCsv, perSampleHeader, perSampleRows } from '../lib/csv.mjs';
+import { perSampleHeader, perSampleRows } from '../lib/csv.mjs';
+import { streamAudit } from '../lib/stream-audit.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
 import { CliError, AtomicOutput, openInput, readSmall, walkLogs, writeAtomic } from '../lib/files.mjs';
 import { parseArgs, suggest } from '../lib/args.mjs';
@@ -56,8 +57,6 @@ function toJson(value, indent) {
   }
 }
 
-const CHUNK = 4 << 20;
-
 /**
  * One word for a report: `faults` (at least one interval), `clean`, or
  * `no verdict` when the log has no GPS fix to judge, so a log the detector
@@ -71,57 +70,21 @@ function verdictOf(report) {
 /** Exit status under --fail-on-fault: 1 when any audited log has faults. */
 let faultsFound = false;
 
-/** True unless the file starts like a ULog or DataFlash log: navlog CSVs are
- * streamed, the binary formats are read whole. */
-function looksLikeCsv(fd) {
-  const head = Buffer.alloc(8);
-  const n = readSync(fd, head, 0, 8, 0);
-  if (n >= 7 && head.subarray(0, 7).equals(Buffer.from([0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35]))) return false;
-  if (n >= 2 && head[0] === 0xa3 && head[1] === 0x95) return false;
-  return true;
-}
-
-/** A navlog CSV in 4 MiB chunks: memory stays bounded whatever the file's
- * size; the per-sample file is written as the outputs come. */
-function auditCsvStream(file, fd, size, perSample, config) {
-  const run = new ng.StreamAuditor(config, perSample !== null);
-  try {
-    if (perSample !== null) perSample.write(perSampleHeader());
-    const buf = Buffer.alloc(CHUNK);
-    for (let pos = 0; ; ) {
-      const n = readSync(fd, buf, 0, CHUNK, pos);
-      if (n === 0) break;
-      pos += n;
-      run.feed(buf.subarray(0, n));
+/** Any log streamed from disk in 4 MiB chunks (lib/stream-audit.mjs):
+ * memory stays bounded whatever the file's size and format; the per-sample
+ * file is written as the outputs come (to its temporary file). */
+function auditStream(file, fd, size, perSample, config) {
+  if (perSample !== null) perSample.write(perSampleHeader());
+  const res = streamAudit(ng, fd, config, {
+    keepOutputs: perSample !== null,
+    onChunk(run, pos, pass) {
       if (perSample !== null) perSample.write(perSampleRows(run.outputs()));
-      progress(`auditing ${file}: ${(100 * pos / Math.max(1, size)).toFixed(0)}% of ${(size / 1e6).toFixed(1)} MB, ${run.rows()} rows`);
-    }
-    const res = run.finish();
-    if (perSample !== null) perSample.write(perSampleRows(res.columns));
-    return res;
-  } finally {
-    run.free();
-  }
-}
-
-/** A ULog or DataFlash log, read whole and audited in slices so a long
- * audit shows its progress on a terminal. */
-function auditBinary(file, fd, perSample, config) {
-  const bytes = readFileSync(fd);
-  const run = new ng.Auditor(bytes, config);
-  try {
-    const rows = run.rows();
-    const slice = Math.max(20000, Math.ceil(rows / 100));
-    for (let done = 0; done < 1; ) {
-      done = run.step(slice);
-      progress(`auditing ${file}: ${(100 * done).toFixed(0)}% of ${rows} rows`);
-    }
-    const res = run.finish();
-    if (perSample !== null) perSample.write(perSampleCsv(res.columns));
-    return res;
-  } finally {
-    run.free();
-  }
+      const of = pass > 1 || run.format() === 'ulog' ? ` (pass ${pass} of 2)` : '';
+      progress(`auditing ${file}: ${(100 * pos / Math.max(1, size)).toFixed(0)}% of ${(size / 1e6).toFixed(1)} MB${of}, ${run.rows()} rows`);
+    },
+  });
+  if (perSample !== null) perSample.write(perSampleRows(res.columns));
+  return res;
 }
 
 function audit(file, opt) {
@@ -135,7 +98,7 @@ function audit(file, opt) {
     if (opt['per-sample']) perSample = new AtomicOutput(opt['per-sample'], '--per-sample', [file]);
     progress(`auditing ${file} (${(size / 1e6).toFixed(1)} MB)...`);
     try {
-      res = looksLikeCsv(fd) ? auditCsvStream(file, fd, size, perSample, config) : auditBinary(file, fd, perSample, config);
+      res = auditStream(file, fd, size, perSample, config);
     } catch (e) {
       if (e instanceof CliError) throw e;
       throw new CliError(`${file}: ${e && e.message ? e.message : e}`);

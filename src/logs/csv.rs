@@ -77,8 +77,9 @@ impl CsvReader {
         }
         let Some(map) = &self.map else {
             if let Some(c) = text.strip_prefix('#') {
+                // Bounded like ULog info strings: comments go into the report.
                 if self.comments.len() < 64 {
-                    self.comments.push(c.trim().to_string());
+                    self.comments.push(c.trim().chars().take(256).collect());
                 }
                 return Ok(());
             }

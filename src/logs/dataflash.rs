@@ -63,11 +63,20 @@
 
 use std::collections::BTreeMap;
 
-use crate::logs::LogData;
+use crate::logs::{LogData, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::sample::Sample;
 
 const HEAD1: u8 = 0xA3;
 const HEAD2: u8 = 0x95;
+/// First bytes of every DataFlash log (the header of its first `FMT`).
+pub(crate) const HEADER: [u8; 3] = [HEAD1, HEAD2, FMT_TYPE];
+/// Message names counted separately at most (real logs: about 100); the
+/// counts of further names are summed under "(other)".
+const MAX_NAMES: usize = 4096;
+/// Reorder ranks at equal time: attitude first (it applies to IMU rows at its
+/// own time), then rows in file order, as the former whole-file stable sort.
+const RANK_ATT: u8 = 0;
+const RANK_ROW: u8 = 1;
 const HEADER_LEN: usize = 3;
 /// Message type of `FMT`, fixed by the format.
 const FMT_TYPE: u8 = 128;
@@ -89,70 +98,216 @@ pub fn is_dataflash(bytes: &[u8]) -> bool {
 /// Parse a DataFlash log into samples sorted by boot time (see the module
 /// doc for the mapping). `Err` (one line) only when no sample row can be read.
 pub fn read_dataflash(bytes: &[u8]) -> Result<LogData, String> {
-    let mut types: Vec<Option<Layout>> = (0..256).map(|_| None).collect();
-    if let Some(slot) = types.get_mut(usize::from(FMT_TYPE)) {
-        *slot = Some(Layout::fmt_builtin());
+    let mut rows = Vec::new();
+    let summary = read_dataflash_into(bytes, &mut rows)?;
+    Ok(summary.with_rows(rows))
+}
+
+/// [`read_dataflash`] with the rows going to `sink`.
+pub fn read_dataflash_into(bytes: &[u8], sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+    let mut s = DataflashStream::new();
+    for c in bytes.chunks(FEED_CHUNK) {
+        s.feed(c, sink);
     }
-    let mut out = Out {
-        counts: vec![0; 256],
-        ..Out::default()
-    };
-    let n = bytes.len();
-    let mut pos = 0usize;
-    while pos < n {
+    s.finish(sink)
+}
+
+/// An incremental DataFlash reader: [`DataflashStream::feed`] the file in
+/// chunks of any size (one pass), then [`DataflashStream::finish`]. Rows
+/// reach the sink in time order through a bounded reorder buffer; it holds
+/// only the bytes of the message being parsed (at most 255) or being
+/// resynchronised on, so memory does not grow with the file.
+pub struct DataflashStream {
+    win: Window,
+    pos: u64,
+    types: Vec<Option<Layout>>,
+    out: Out,
+    /// Resync in progress: (where the bad bytes began, scan position).
+    scan: Option<(u64, u64)>,
+    stopped: bool,
+}
+
+impl Default for DataflashStream {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl DataflashStream {
+    pub fn new() -> Self {
+        let mut types: Vec<Option<Layout>> = (0..256).map(|_| None).collect();
+        if let Some(slot) = types.get_mut(usize::from(FMT_TYPE)) {
+            *slot = Some(Layout::fmt_builtin());
+        }
+        let out = Out { counts: vec![0; 256], ..Out::default() };
+        DataflashStream { win: Window::default(), pos: 0, types, out, scan: None, stopped: false }
+    }
+
+    /// Bytes fed so far.
+    pub fn bytes(&self) -> u64 {
+        self.win.end()
+    }
+
+    /// Bytes the reader holds now in its input window and reorder buffer:
+    /// what must not grow with the file.
+    pub fn held_bytes(&self) -> usize {
+        self.win.held_bytes() + self.out.emit.held_bytes()
+    }
+
+    pub fn feed(&mut self, chunk: &[u8], sink: &mut dyn RowSink) {
+        self.win.push(chunk);
+        self.run(false, sink);
+    }
+
+    /// End of input: the rows still buffered go to `sink`.
+    pub fn finish(mut self, sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+        self.run(true, sink);
+        let n = self.win.end();
+        self.out.finish(&self.types, n, sink)
+    }
+
+    fn run(&mut self, eof: bool, sink: &mut dyn RowSink) {
+        while !self.stopped && self.step(eof, sink) {}
+        let keep = self.scan.map_or(self.pos, |(_, p)| p);
+        self.win.consume(keep);
+    }
+
+    /// Type of a valid header at `pos` whose type has a layout; `Err` when
+    /// the 3 header bytes are not all in yet.
+    fn known_header(&self, pos: u64) -> Result<Option<u8>, ()> {
+        match *self.win.get(pos, pos + HEADER_LEN as u64) {
+            [HEAD1, HEAD2, ty] if self.types.get(usize::from(ty)).is_some_and(Option::is_some) => Ok(Some(ty)),
+            [_, _, _] => Ok(None),
+            _ => Err(()),
+        }
+    }
+
+    /// One message; false when more bytes are needed or the input is done.
+    fn step(&mut self, eof: bool, sink: &mut dyn RowSink) -> bool {
+        if let Some((start, p)) = self.scan {
+            let Some(next) = self.resync(p, eof) else {
+                return false;
+            };
+            self.scan = None;
+            self.out.skip((next - start) as usize);
+            self.pos = next;
+            return true;
+        }
+        let n = self.win.end();
+        let pos = self.pos;
+        if pos >= n {
+            return false;
+        }
         let rest = n - pos;
-        if rest < HEADER_LEN {
-            let partial_header =
-                bytes.get(pos) == Some(&HEAD1) && (rest == 1 || bytes.get(pos + 1) == Some(&HEAD2));
+        if rest < HEADER_LEN as u64 {
+            if !eof {
+                return false;
+            }
+            let b = self.win.get(pos, n);
+            let partial_header = b.first() == Some(&HEAD1) && (rest == 1 || b.get(1) == Some(&HEAD2));
             if partial_header {
-                out.warn(format!(
+                self.out.warn(format!(
                     "truncated at byte {n} in the middle of a message header (starts at byte {pos})"
                 ));
             } else {
-                out.skip(rest);
+                self.out.skip(rest as usize);
             }
-            break;
+            self.stopped = true;
+            return false;
         }
-        let Some(ty) = known_header(bytes, pos, &types) else {
-            let next = resync(bytes, pos + 1, &types);
-            out.skip(next - pos);
-            pos = next;
-            continue;
+        let Ok(Some(ty)) = self.known_header(pos) else {
+            self.scan = Some((pos, pos + 1));
+            return true;
         };
-        let Some(layout) = types.get(usize::from(ty)).and_then(Option::as_ref) else {
-            break; // unreachable: known_header checked it
+        let Some(len) = self.types.get(usize::from(ty)).and_then(Option::as_ref).map(|l| l.len as u64) else {
+            self.stopped = true; // unreachable: known_header checked it
+            return false;
         };
-        let end = match pos.checked_add(layout.len) {
-            Some(e) if e <= n => e,
-            _ => {
-                out.warn(format!(
-                    "truncated at byte {n} in the middle of a {} message (starts at byte {pos}, {} bytes long)",
-                    layout.name, layout.len
-                ));
-                break;
+        let end = pos + len;
+        if end > n {
+            if eof {
+                let name = self.types.get(usize::from(ty)).and_then(Option::as_ref).map_or("", |l| l.name.as_str());
+                let w = format!(
+                    "truncated at byte {n} in the middle of a {name} message (starts at byte {pos}, {len} bytes long)"
+                );
+                self.out.warn(w);
+                self.stopped = true;
             }
-        };
-        let Some(msg) = bytes.get(pos..end) else {
-            break;
-        };
-        if let Some(c) = out.counts.get_mut(usize::from(ty)) {
+            return false;
+        }
+        let msg = self.win.get(pos, end);
+        if let Some(c) = self.out.counts.get_mut(usize::from(ty)) {
             *c += 1;
         }
-        out.messages += 1;
+        self.out.messages += 1;
+        let Some(layout) = self.types.get(usize::from(ty)).and_then(Option::as_ref) else {
+            return false;
+        };
         match layout.kind {
-            Kind::Fmt => on_fmt(msg, &mut types, &mut out),
-            Kind::Fmtu => on_fmtu(msg, ty, &mut types),
-            Kind::Gps => out.on_gps(layout, msg),
-            Kind::Gpa => out.on_gpa(layout, msg),
-            Kind::Imu => out.on_imu(layout, msg),
-            Kind::Att => out.on_att(layout, msg),
-            Kind::Baro => out.on_baro(layout, msg),
-            Kind::Msg => out.on_msg(layout, msg),
+            Kind::Fmt => on_fmt(msg, &mut self.types, &mut self.out),
+            Kind::Fmtu => on_fmtu(msg, ty, &mut self.types),
+            Kind::Gps => self.out.on_gps(layout, msg, sink),
+            Kind::Gpa => self.out.on_gpa(layout, msg),
+            Kind::Imu => self.out.on_imu(layout, msg, sink),
+            Kind::Att => self.out.on_att(layout, msg, sink),
+            Kind::Baro => self.out.on_baro(layout, msg, sink),
+            Kind::Msg => self.out.on_msg(layout, msg),
             Kind::Other => {}
         }
-        pos = end;
+        self.pos = end;
+        true
     }
-    out.finish(&types, n)
+
+    /// Position of the next plausible message at or after `from`, or the
+    /// end of input; `None` (with the scan position saved) when more bytes
+    /// are needed to decide. A candidate needs a known type and, unless it
+    /// reaches the end, a valid header right after it: `0xA3 0x95` also
+    /// occurs inside payloads. Scanning only moves forward, so resyncing is
+    /// linear in the input size.
+    fn resync(&mut self, from: u64, eof: bool) -> Option<u64> {
+        let n = self.win.end();
+        let mut p = from;
+        loop {
+            if p >= n {
+                return self.wait(p, n, eof);
+            }
+            let Some(i) = self.win.get(p, n).windows(2).position(|w| w == [HEAD1, HEAD2]) else {
+                // The last byte may be the start of a header.
+                return self.wait(n.saturating_sub(1).max(p), n, eof);
+            };
+            let c = p + i as u64;
+            match self.known_header(c) {
+                Err(()) if !eof => return self.wait(c, n, eof),
+                Ok(Some(ty)) => {
+                    let len = self.types.get(usize::from(ty)).and_then(Option::as_ref).map_or(0, |l| l.len as u64);
+                    let next = c + len;
+                    if next + HEADER_LEN as u64 > n {
+                        if eof {
+                            return Some(c); // reaches the end: truncation is reported later
+                        }
+                        return self.wait(c, n, eof);
+                    }
+                    if matches!(self.known_header(next), Ok(Some(_))) {
+                        return Some(c);
+                    }
+                }
+                _ => {}
+            }
+            p = c + 1;
+        }
+    }
+
+    /// Resync needs bytes from `p` on: at the end of input there are none
+    /// (resume at the end), else remember where to scan from.
+    fn wait(&mut self, p: u64, n: u64, eof: bool) -> Option<u64> {
+        if eof {
+            return Some(n);
+        }
+        if let Some(s) = self.scan.as_mut() {
+            s.1 = p;
+        }
+        None
+    }
 }
 
 // ---------------------------------------------------------------------------
@@ -509,46 +664,6 @@ fn f16_to_f64(h: u16) -> f64 {
 // ---------------------------------------------------------------------------
 // Framing
 
-/// Type of a valid header at `pos` whose type has a layout.
-fn known_header(bytes: &[u8], pos: usize, types: &[Option<Layout>]) -> Option<u8> {
-    match bytes.get(pos..pos.checked_add(HEADER_LEN)?)? {
-        [HEAD1, HEAD2, ty] if types.get(usize::from(*ty)).is_some_and(Option::is_some) => Some(*ty),
-        _ => None,
-    }
-}
-
-/// Position of the next plausible message at or after `from`, or the input
-/// length. A candidate needs a known type and, unless it reaches the end,
-/// a valid header right after it: `0xA3 0x95` also occurs inside payloads.
-/// Scanning only moves forward, so resyncing is linear in the input size.
-fn resync(bytes: &[u8], from: usize, types: &[Option<Layout>]) -> usize {
-    let n = bytes.len();
-    let mut p = from;
-    while p < n {
-        let Some(i) = bytes
-            .get(p..)
-            .and_then(|s| s.windows(2).position(|w| w == [HEAD1, HEAD2]))
-        else {
-            return n;
-        };
-        let c = p + i;
-        if let Some(ty) = known_header(bytes, c, types) {
-            let len = types
-                .get(usize::from(ty))
-                .and_then(Option::as_ref)
-                .map_or(0, |l| l.len);
-            match c.checked_add(len) {
-                // Reaches the end: accept, truncation is reported later.
-                Some(next) if next.saturating_add(HEADER_LEN) > n => return c,
-                Some(next) if known_header(bytes, next, types).is_some() => return c,
-                _ => {}
-            }
-        }
-        p = c + 1;
-    }
-    n
-}
-
 fn on_fmt(msg: &[u8], types: &mut [Option<Layout>], out: &mut Out) {
     let Some((ty, layout, warning)) = Layout::from_fmt(msg) else {
         out.warn_once("an FMT message with a length below 3 bytes was ignored".to_string());
@@ -606,15 +721,30 @@ fn on_fmtu(msg: &[u8], fmtu_ty: u8, types: &mut [Option<Layout>]) {
 // ---------------------------------------------------------------------------
 // Output
 
+/// What goes through the reorder buffer.
+enum Item {
+    Row(Sample),
+    /// An IMU row: gets the latest attitude.
+    Imu(Sample),
+    /// (t s, quaternion w x y z)
+    Att(f64, [f64; 4]),
+}
+
 #[derive(Default)]
 struct Out {
-    samples: Vec<Sample>,
-    /// (t, quaternion) of every ATT message.
-    att: Vec<(f64, [f64; 4])>,
-    /// Indices into `samples` of IMU rows, to receive attitude.
-    imu_rows: Vec<usize>,
-    /// Index and time of the last GPS row, for its GPA companion.
-    last_gps: Option<(usize, f64)>,
+    /// Rows and attitudes on their way to the sink, in time order.
+    emit: Reorder<Item>,
+    /// Latest attitude handed on: (t s, quaternion).
+    att: Option<(f64, [f64; 4])>,
+    /// IMU rows handed on with an attitude.
+    with_att: u64,
+    /// Time of the first and last row handed on, s.
+    span: Option<(f64, f64)>,
+    /// The last GPS row and its place in the reorder order, held back until
+    /// its GPA companion may have come.
+    pending_gps: Option<(Sample, u64)>,
+    /// Time of the last GPS row, for its GPA companion.
+    last_gps_t: Option<f64>,
     /// Boot time of the last mapped message, for GPS without a boot clock.
     last_boot_t: Option<f64>,
     counts_by_name: BTreeMap<String, u64>,
@@ -633,6 +763,53 @@ struct Out {
 }
 
 impl Out {
+    /// A row or an attitude into the reorder buffer (file order = arrival).
+    fn push(&mut self, t: f64, rank: u8, item: Item, sink: &mut dyn RowSink) {
+        let seq = self.emit.take_seq();
+        self.emit_at(t, rank, seq, item, sink);
+    }
+
+    fn emit_at(&mut self, t: f64, rank: u8, seq: u64, item: Item, sink: &mut dyn RowSink) {
+        // The held GPS row goes in before it would be overtaken.
+        if let Some((g, gseq)) = self.pending_gps {
+            if self.emit.len() >= REORDER_ROWS && self.emit.precedes_all(g.t, RANK_ROW, gseq) {
+                self.pending_gps = None;
+                self.emit_at(g.t, RANK_ROW, gseq, Item::Row(g), sink);
+            }
+        }
+        let Out { emit, att, with_att, span, .. } = self;
+        emit.push_at(t, rank, seq, item, &mut |i| Self::out(att, with_att, span, i, sink));
+    }
+
+    fn out(att: &mut Option<(f64, [f64; 4])>, with_att: &mut u64, span: &mut Option<(f64, f64)>, item: Item, sink: &mut dyn RowSink) {
+        let row = match item {
+            Item::Att(t, q) => {
+                *att = Some((t, q));
+                return;
+            }
+            Item::Row(row) => row,
+            Item::Imu(mut row) => {
+                // Attitude onto IMU rows: newest ATT at or before the row, if fresh.
+                if let Some((ta, q)) = *att {
+                    if row.t - ta <= ATT_MAX_AGE_S {
+                        [row.qw, row.qx, row.qy, row.qz] = q;
+                        *with_att += 1;
+                    }
+                }
+                row
+            }
+        };
+        *span = Some(span.map_or((row.t, row.t), |(a, _)| (a, row.t)));
+        sink.row(&row);
+    }
+
+    /// Hand on the held GPS row (a new one came, or the end).
+    fn flush_gps(&mut self, sink: &mut dyn RowSink) {
+        if let Some((g, seq)) = self.pending_gps.take() {
+            self.emit_at(g.t, RANK_ROW, seq, Item::Row(g), sink);
+        }
+    }
+
     fn warn(&mut self, w: String) {
         if self.warnings.len() < MAX_WARNINGS {
             self.warnings.push(w);
@@ -657,7 +834,8 @@ impl Out {
     fn flush_count(&mut self, ty: u8, name: &str) {
         if let Some(c) = self.counts.get_mut(usize::from(ty)) {
             if *c > 0 {
-                *self.counts_by_name.entry(name.to_string()).or_default() += *c;
+                let key = if self.counts_by_name.len() < MAX_NAMES || self.counts_by_name.contains_key(name) { name } else { "(other)" };
+                *self.counts_by_name.entry(key.to_string()).or_default() += *c;
                 *c = 0;
             }
         }
@@ -691,7 +869,7 @@ impl Out {
         t
     }
 
-    fn on_gps(&mut self, l: &Layout, msg: &[u8]) {
+    fn on_gps(&mut self, l: &Layout, msg: &[u8], sink: &mut dyn RowSink) {
         if !l.instance0(msg) {
             return;
         }
@@ -728,9 +906,11 @@ impl Out {
                 s.eph = hdop; // HDop x 1 m user range error, see module doc
             }
         }
-        self.last_gps = Some((self.samples.len(), t));
+        self.flush_gps(sink);
+        self.last_gps_t = Some(t);
         self.n_gps += 1;
-        self.samples.push(s);
+        let seq = self.emit.take_seq();
+        self.pending_gps = Some((s, seq));
     }
 
     fn on_gpa(&mut self, l: &Layout, msg: &[u8]) {
@@ -738,11 +918,12 @@ impl Out {
             return;
         }
         let Some(t) = self.time(l, msg) else { return };
-        let Some((i, tg)) = self.last_gps else { return };
+        let Some(tg) = self.last_gps_t else { return };
         if (t - tg).abs() > GPA_MATCH_S {
             return;
         }
-        let Some(s) = self.samples.get_mut(i) else {
+        // Gone only if more than a reorder buffer of rows came in between.
+        let Some((s, _)) = self.pending_gps.as_mut() else {
             return;
         };
         if s.fix < 2.0 {
@@ -760,7 +941,7 @@ impl Out {
         }
     }
 
-    fn on_imu(&mut self, l: &Layout, msg: &[u8]) {
+    fn on_imu(&mut self, l: &Layout, msg: &[u8], sink: &mut dyn RowSink) {
         if !l.instance0(msg) {
             return;
         }
@@ -774,12 +955,11 @@ impl Out {
         s.gx = l.num(msg, IMU_GYRX);
         s.gy = l.num(msg, IMU_GYRX + 1);
         s.gz = l.num(msg, IMU_GYRX + 2);
-        self.imu_rows.push(self.samples.len());
         self.n_imu += 1;
-        self.samples.push(s);
+        self.push(t, RANK_ROW, Item::Imu(s), sink);
     }
 
-    fn on_att(&mut self, l: &Layout, msg: &[u8]) {
+    fn on_att(&mut self, l: &Layout, msg: &[u8], sink: &mut dyn RowSink) {
         let Some(t) = self.time_or_warn(l, msg) else {
             return;
         };
@@ -789,11 +969,11 @@ impl Out {
             l.num(msg, ATT_YAW),
         );
         if r.is_finite() && p.is_finite() && y.is_finite() {
-            self.att.push((t, euler_deg_to_quat(r, p, y)));
+            self.push(t, RANK_ATT, Item::Att(t, euler_deg_to_quat(r, p, y)), sink);
         }
     }
 
-    fn on_baro(&mut self, l: &Layout, msg: &[u8]) {
+    fn on_baro(&mut self, l: &Layout, msg: &[u8], sink: &mut dyn RowSink) {
         if !l.instance0(msg) {
             return;
         }
@@ -803,7 +983,7 @@ impl Out {
         let mut s = Sample::at(t);
         s.baro = l.num(msg, BARO_ALT);
         self.n_baro += 1;
-        self.samples.push(s);
+        self.push(t, RANK_ROW, Item::Row(s), sink);
     }
 
     fn on_msg(&mut self, l: &Layout, msg: &[u8]) {
@@ -819,13 +999,18 @@ impl Out {
         }
     }
 
-    fn finish(mut self, types: &[Option<Layout>], n_bytes: usize) -> Result<LogData, String> {
+    fn finish(mut self, types: &[Option<Layout>], n_bytes: u64, sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+        self.flush_gps(sink);
+        {
+            let Out { emit, att, with_att, span, .. } = &mut self;
+            emit.drain(&mut |i| Self::out(att, with_att, span, i, sink));
+        }
         for (ty, l) in types.iter().enumerate() {
             if let (Some(l), Ok(ty)) = (l, u8::try_from(ty)) {
                 self.flush_count(ty, &l.name);
             }
         }
-        if self.samples.is_empty() {
+        if self.n_gps + self.n_imu + self.n_baro == 0 {
             let why = if self.messages == 0 {
                 "not a DataFlash log: no message with a 0xA3 0x95 header and a known type"
                     .to_string()
@@ -842,25 +1027,6 @@ impl Out {
                 .unwrap_or_default();
             return Err(format!("{why}{first}"));
         }
-
-        // Attitude onto IMU rows: newest ATT at or before the row, if fresh.
-        self.att.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut with_att = 0u64;
-        for &i in &self.imu_rows {
-            let Some(s) = self.samples.get_mut(i) else {
-                continue;
-            };
-            let k = self.att.partition_point(|a| a.0 <= s.t);
-            let Some(&(ta, q)) = k.checked_sub(1).and_then(|k| self.att.get(k)) else {
-                continue;
-            };
-            if s.t - ta <= ATT_MAX_AGE_S {
-                [s.qw, s.qx, s.qy, s.qz] = q;
-                with_att += 1;
-            }
-        }
-        // Stable: rows with equal t keep their file order.
-        self.samples.sort_by(|a, b| a.t.total_cmp(&b.t));
 
         if self.skipped > 0 {
             let w = format!(
@@ -887,10 +1053,7 @@ impl Out {
             _ => "TimeUS+TimeMS",
         };
         meta.push(("time_base".to_string(), base.to_string()));
-        let (t0, t1) = match (self.samples.first(), self.samples.last()) {
-            (Some(a), Some(b)) => (a.t, b.t),
-            _ => (0.0, 0.0),
-        };
+        let (t0, t1) = self.span.unwrap_or((0.0, 0.0));
         meta.push(("duration".to_string(), format!("{:.3}", t1 - t0)));
         meta.push(("messages".to_string(), self.messages.to_string()));
 
@@ -898,7 +1061,7 @@ impl Out {
         for (name, n) in [
             ("gps", self.n_gps),
             ("imu", self.n_imu),
-            ("attitude", with_att),
+            ("attitude", self.with_att),
             ("baro", self.n_baro),
         ] {
             if n == 0 {
@@ -906,9 +1069,11 @@ impl Out {
             }
         }
 
-        Ok(LogData {
+        if self.emit.late > 0 {
+            self.warnings.push(format!("{} rows dropped: more than {REORDER_ROWS} rows out of time order", self.emit.late));
+        }
+        Ok(LogSummary {
             format: "dataflash",
-            samples: self.samples,
             meta,
             warnings: self.warnings,
             missing,

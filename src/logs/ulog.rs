@@ -9,14 +9,27 @@
 //! Unknown types are skipped; implausible headers trigger a resync on the next
 //! sync marker (as pyulog does).
 //!
-//! Design, because it runs in wasm on whole files and is fuzzed:
+//! Design, because it runs in wasm on files of any size and is fuzzed:
+//! - Streamed ([`UlogStream`]): the file comes in chunks of any size and
+//!   only the bytes of the message being parsed are held (plus, while
+//!   resynchronising, at most [`RESYNC_WINDOW`] bytes). Rows reach the sink in
+//!   time order through a bounded [`Reorder`] buffer. The choice of GPS and
+//!   baro source depends on the whole file, so a file is read twice: a first
+//!   pass ([`UlogStream::plan`]) that only notes which topics have data, then
+//!   the pass that emits rows. Nothing kept grows with the file: formats,
+//!   topics, info strings and log lines are capped, and anything dropped at a
+//!   cap is counted in the warnings.
 //! - Never panics: all reads go through `get`, sizes use checked arithmetic,
-//!   and no allocation is sized from an untrusted length (everything we store
-//!   is bounded by the bytes actually present).
+//!   and no allocation is sized from an untrusted length.
 //! - Fast: each subscription gets its field offsets once (at its `A`
 //!   message), so a data message costs a table look-up, a size check, a
 //!   counter increment and, only for the few mapped topics, a handful of
-//!   fixed-offset reads. Names borrow from the input: no per-message `String`.
+//!   fixed-offset reads.
+//! - Linear on hostile files: a format redefinition invalidates the cached
+//!   layouts (so later subscriptions always see the current format), and the
+//!   work of computing layouts is bounded by a budget that grows with the
+//!   bytes read ([`LAYOUT_WORK_PER_BYTE`]); a subscription over budget is
+//!   ignored and counted in the warnings.
 //!
 //! Mapping (one [`Sample`] per message, `t` = the message's `timestamp` / 1e6, s):
 //! - GPS: `vehicle_gps_position` (preferred) or `sensor_gps`, `multi_id` 0.
@@ -38,15 +51,18 @@
 //! - Unknown incompatible flag bits: the spec says refuse; we warn and read on.
 //! - `meta`: ulog_version, duration_s (last data timestamp - header
 //!   timestamp), every `I` info (perf dumps skipped, values cut at 256 bytes),
-//!   `M` keys, parameter/log counts, gps_topic, warning-or-worse log lines.
+//!   timestamp), `I` info (perf dumps skipped, values cut at 256 bytes, at
+//!   most [`MAX_INFO`] entries), `M` keys, parameter/log counts, gps_topic,
+//!   warning-or-worse log lines.
 
 use std::collections::HashMap;
+use std::rc::Rc;
 
-use super::LogData;
+use super::{LogData, LogSummary, NoRows, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::sample::Sample;
 
 /// First 7 header bytes of every ULog file ("ULog" + 0x01 0x12 0x35).
-const MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];
+pub(crate) const MAGIC: [u8; 7] = [0x55, 0x4c, 0x6f, 0x67, 0x01, 0x12, 0x35];
 /// Payload of a sync (`S`) message; also what we scan for after corruption.
 const SYNC_MAGIC: [u8; 8] = [0x2f, 0x73, 0x13, 0x20, 0x25, 0x0c, 0xbb, 0x12];
 /// Magic (7) + version (1) + start timestamp (8).
@@ -64,6 +80,29 @@ const MAX_PLAUSIBLE_UNKNOWN_SIZE: usize = 10_000;
 const MAX_LOG_LINES: usize = 64;
 /// Info (`I`) value kept per key, bytes.
 const MAX_INFO_BYTES: usize = 256;
+/// Info (`I`) entries kept in `meta` (real logs: 20 to 40). Keeps the report
+/// small whatever the file: a file of 200,000 info messages gives a warning,
+/// not a JSON report past the JS string limit.
+pub const MAX_INFO: usize = 256;
+/// How far past a corrupt header the reader looks for a sync marker, bytes.
+/// Without one in that window it crawls byte by byte (pyulog's fallback);
+/// the window bounds the bytes held while looking.
+pub const RESYNC_WINDOW: u64 = 4 << 20;
+/// Bytes of format definitions kept (real logs: 100-200 KB).
+const MAX_FORMAT_BYTES: usize = 8 << 20;
+/// Distinct (topic, multi_id) instances kept (real logs: a few hundred).
+const MAX_TOPICS: usize = 1 << 14;
+/// Layout computation allowed per byte read (field visits), on top of
+/// [`LAYOUT_WORK_BASE`]: real logs use well under 1 per byte.
+const LAYOUT_WORK_PER_BYTE: u64 = 16;
+const LAYOUT_WORK_BASE: u64 = 1 << 22;
+/// Reorder ranks at equal time: GPS rows, then attitude (applies to IMU rows
+/// at its own time), then IMU rows, then baro rows: the order of the former
+/// whole-file stable sort.
+const RANK_GPS: u8 = 0;
+const RANK_ATT: u8 = 1;
+const RANK_IMU: u8 = 2;
+const RANK_BARO: u8 = 3;
 
 /// true when the bytes start with the ULog magic.
 pub fn is_ulog(bytes: &[u8]) -> bool {
@@ -73,23 +112,244 @@ pub fn is_ulog(bytes: &[u8]) -> bool {
 /// Parse a whole ULog file. Err(String) only when nothing usable can be read
 /// (too short, bad magic, no message after the header), with a one-line reason.
 pub fn read_ulog(bytes: &[u8]) -> Result<LogData, String> {
-    if !is_ulog(bytes) {
-        return Err("not a ULog file (bad magic)".to_string());
+    let mut rows = Vec::new();
+    let summary = read_ulog_into(bytes, &mut rows)?;
+    Ok(summary.with_rows(rows))
+}
+
+/// [`read_ulog`] with the rows going to `sink` (both passes over `bytes`).
+pub fn read_ulog_into(bytes: &[u8], sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+    let mut scan = UlogStream::plan();
+    for c in bytes.chunks(FEED_CHUNK) {
+        scan.feed(c, &mut NoRows);
     }
-    if bytes.len() < HEADER_LEN {
-        return Err(format!(
-            "ULog header truncated ({} of 16 bytes)",
-            bytes.len()
-        ));
+    let mut s = scan.second_pass()?;
+    for c in bytes.chunks(FEED_CHUNK) {
+        s.feed(c, sink);
     }
-    let version = bytes.get(7).copied().unwrap_or(0);
-    let start_us = le::<8>(bytes, 8).map_or(0, u64::from_le_bytes);
-    let mut p = Parser::new(bytes);
-    p.run();
-    if p.messages == 0 {
-        return Err("ULog file has no readable message after the header".to_string());
+    s.finish(sink)
+}
+
+/// Which sources have rows: found by the first pass, used by the second.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Seen {
+    vgp: bool,
+    sensor_gps: bool,
+    air: bool,
+    sensor_baro: bool,
+}
+
+/// An incremental ULog reader. Feed the file in chunks of any size
+/// ([`UlogStream::feed`]), twice: the first stream ([`UlogStream::plan`])
+/// emits nothing and only finds which topics have data; its
+/// [`UlogStream::second_pass`] is fed the same bytes again and emits every
+/// row; [`UlogStream::finish`] then gives the metadata and warnings. Memory is
+/// bounded whatever the file's size.
+pub struct UlogStream {
+    win: Window,
+    /// Absolute position of the next message.
+    pos: u64,
+    /// (version, start µs) once the 16-byte header is in.
+    header: Option<(u8, u64)>,
+    /// `None` in the first pass.
+    plan: Option<Seen>,
+    /// File length (second pass: what the first pass saw).
+    total: Option<u64>,
+    /// Set once parsing stopped for good (truncated last message).
+    stopped: bool,
+    /// Resync scan in progress: (from, scanned up to), absolute.
+    scan: Option<(u64, u64)>,
+    p: Parser,
+}
+
+impl UlogStream {
+    /// The first pass.
+    pub fn plan() -> Self {
+        Self::with(None, None)
     }
-    Ok(p.finish(version, start_us))
+
+    fn with(plan: Option<Seen>, total: Option<u64>) -> Self {
+        UlogStream { win: Window::default(), pos: HEADER_LEN as u64, header: None, plan, total, stopped: false, scan: None, p: Parser::new(plan) }
+    }
+
+    /// Bytes fed so far.
+    pub fn bytes(&self) -> u64 {
+        self.win.end()
+    }
+
+    /// Bytes the reader holds now in its input window and reorder buffer
+    /// (not counting formats and metadata, which are capped): what must
+    /// not grow with the file.
+    pub fn held_bytes(&self) -> usize {
+        self.win.held_bytes() + self.p.emit.reorder.held_bytes()
+    }
+
+    /// True for the first pass (no rows yet).
+    pub fn is_planning(&self) -> bool {
+        self.plan.is_none()
+    }
+
+    /// End of the first pass: a fresh reader to be fed the same bytes again.
+    /// Err when the file has no usable header or message.
+    pub fn second_pass(mut self) -> Result<UlogStream, String> {
+        self.run(true, &mut NoRows);
+        self.check()?;
+        let seen = self.p.seen;
+        Ok(Self::with(Some(seen), Some(self.win.end())))
+    }
+
+    fn check(&self) -> Result<(), String> {
+        if self.header.is_none() {
+            if !self.win.get(0, 7).starts_with(&MAGIC) {
+                return Err("not a ULog file (bad magic)".to_string());
+            }
+            return Err(format!("ULog header truncated ({} of 16 bytes)", self.win.end()));
+        }
+        if self.p.messages == 0 {
+            return Err("ULog file has no readable message after the header".to_string());
+        }
+        Ok(())
+    }
+
+    /// The next chunk of the file.
+    pub fn feed(&mut self, chunk: &[u8], sink: &mut dyn RowSink) {
+        self.win.push(chunk);
+        self.run(false, sink);
+    }
+
+    /// End of the second pass: rows still buffered go to `sink`; the
+    /// metadata, warnings and counts.
+    pub fn finish(mut self, sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+        self.run(true, sink);
+        self.check()?;
+        let (version, start_us) = self.header.unwrap_or((0, 0));
+        Ok(self.p.finish(version, start_us, sink))
+    }
+
+    /// Parse what is held; at `eof`, to the end. Every iteration either
+    /// advances `pos`, consumes an appended offset or returns, so it ends.
+    fn run(&mut self, eof: bool, sink: &mut dyn RowSink) {
+        if self.header.is_none() {
+            let h = self.win.get(0, HEADER_LEN as u64);
+            if h.len() < HEADER_LEN || !h.starts_with(&MAGIC) {
+                return;
+            }
+            let version = h.get(7).copied().unwrap_or(0);
+            let start_us = le::<8>(h, 8).map_or(0, u64::from_le_bytes);
+            self.header = Some((version, start_us));
+        }
+        while !self.stopped && self.step(eof, sink) {}
+        // Keep only what the next message (or the resync scan) still needs.
+        let keep = self.scan.map_or(self.pos, |(from, _)| from.saturating_sub(1).min(self.pos));
+        self.win.consume(keep);
+    }
+
+    /// One message; false when more bytes are needed (or the end is reached).
+    fn step(&mut self, eof: bool, sink: &mut dyn RowSink) -> bool {
+        let pos = self.pos;
+        let pending = self.p.appended.get(self.p.next_appended).copied();
+        if let Some(off) = pending {
+            if pos >= off {
+                self.p.next_appended += 1;
+                return true;
+            }
+        }
+        let avail = self.win.end();
+        if pos >= avail {
+            return false;
+        }
+        let rest_len = avail - pos;
+        if rest_len < 3 && !eof {
+            return false;
+        }
+        let (size, ty) = match *self.win.get(pos, pos + 3) {
+            [s0, s1, ty] => (u64::from(u16::from_le_bytes([s0, s1])), ty),
+            _ => (u64::MAX, 0),
+        };
+        let end = pos.saturating_add(3).saturating_add(size);
+        // Appended data: a message running past the next offset was cut
+        // when the log stopped; parsing restarts at the offset (spec).
+        if let Some(off) = pending {
+            if end > off {
+                self.pos = off;
+                self.p.next_appended += 1;
+                return true;
+            }
+        }
+        if end > avail {
+            if eof {
+                self.p.warnings.push(format!("file truncated: last message at byte {pos} incomplete ({rest_len} bytes ignored)"));
+                self.stopped = true;
+            }
+            return false;
+        }
+        self.p.layout_allow = LAYOUT_WORK_BASE.saturating_add(pos.saturating_mul(LAYOUT_WORK_PER_BYTE));
+        let payload = self.win.get(pos + 3, end);
+        let known = self.p.handle(pos, ty, payload, self.total, sink);
+        if known {
+            self.p.messages += 1;
+            self.pos = end;
+        } else if ty == 0 || size == 0 || size > MAX_PLAUSIBLE_UNKNOWN_SIZE as u64 {
+            // Implausible header: resync on the next sync marker, or
+            // crawl byte by byte if there is none near (pyulog's way).
+            let from = pos + 1;
+            let found = if self.p.has_sync {
+                match self.find_sync(from, eof) {
+                    Scan::Found(next) => Some(next),
+                    Scan::None => None,
+                    Scan::More => return false,
+                }
+            } else {
+                None
+            };
+            self.scan = None;
+            self.p.resyncs += 1;
+            match found {
+                Some(next) => {
+                    self.p.skipped_bytes += next - pos;
+                    self.pos = next;
+                }
+                None => {
+                    self.p.has_sync = false;
+                    self.p.skipped_bytes += 1;
+                    self.pos = from;
+                }
+            }
+        } else {
+            // A message type newer than this reader: skip it.
+            self.p.unknown_types += 1;
+            self.pos = end;
+        }
+        true
+    }
+
+    /// Position just after the next sync marker within [`RESYNC_WINDOW`]
+    /// bytes of `from`, scanning only bytes not scanned before.
+    fn find_sync(&mut self, from: u64, eof: bool) -> Scan {
+        let limit = from.saturating_add(RESYNC_WINDOW);
+        let start = match self.scan {
+            Some((f, done)) if f == from => done,
+            _ => from,
+        };
+        let end = self.win.end().min(limit);
+        let hay = self.win.get(start, end);
+        if let Some(i) = hay.windows(SYNC_MAGIC.len()).position(|w| w == SYNC_MAGIC) {
+            return Scan::Found(start + i as u64 + SYNC_MAGIC.len() as u64);
+        }
+        if eof || end >= limit {
+            return Scan::None;
+        }
+        // Resume where a marker could still start.
+        let done = end.saturating_sub(SYNC_MAGIC.len() as u64 - 1).max(start);
+        self.scan = Some((from, done));
+        Scan::More
+    }
+}
+
+enum Scan {
+    Found(u64),
+    None,
+    More,
 }
 
 // ---------------------------------------------------------------------------
@@ -205,15 +465,15 @@ fn trim_nul(b: &[u8]) -> &[u8] {
 // Format definitions
 
 /// One field of an `F` message: `type[len] name` (len 1 for scalars).
-#[derive(Clone, Copy, Debug)]
-struct Field<'a> {
-    ty: &'a str,
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct Field {
+    ty: String,
     len: usize,
-    name: &'a str,
+    name: String,
 }
 
 /// Parse an `F` payload `"name:type field;type[n] field;..."`.
-fn parse_format(payload: &[u8]) -> Option<(&str, Vec<Field<'_>>)> {
+fn parse_format(payload: &[u8]) -> Option<(&str, Vec<Field>)> {
     let s = std::str::from_utf8(trim_nul(payload)).ok()?;
     let (name, rest) = s.split_once(':')?;
     let mut fields = Vec::new();
@@ -228,27 +488,34 @@ fn parse_format(payload: &[u8]) -> Option<(&str, Vec<Field<'_>>)> {
             None => (ty, 1),
         };
         fields.push(Field {
-            ty,
+            ty: ty.to_string(),
             len,
-            name: fname.trim(),
+            name: fname.trim().to_string(),
         });
     }
     Some((name.trim(), fields))
 }
 
-/// All format definitions, with memoised type sizes.
+/// All format definitions, with memoised type sizes and topic templates.
 #[derive(Default)]
-struct Defs<'a> {
-    formats: HashMap<&'a str, Vec<Field<'a>>>,
+struct Defs {
+    formats: HashMap<String, (Rc<Vec<Field>>, usize)>,
+    /// Bytes of the `F` payloads in `formats`.
+    format_bytes: usize,
     /// Size (bytes) of each resolved nested type; None = unresolvable.
-    sizes: HashMap<&'a str, Option<usize>>,
+    sizes: HashMap<String, Option<usize>>,
     /// Per-topic subscription template (layout + role for multi_id 0), so
     /// that repeated `A` messages for one topic cost a hash look-up.
-    templates: HashMap<&'a str, Option<Template>>,
+    templates: HashMap<String, Option<Template>>,
     /// Some cached result is None (maybe a forward reference).
     cached_failure: bool,
-    /// Cache invalidations so far (bounded, see `add`).
-    clears: u32,
+    /// Field visits spent on layouts so far, and the current allowance.
+    work: u64,
+    allow: u64,
+    /// Formats not kept: over [`MAX_FORMAT_BYTES`].
+    dropped: u64,
+    /// Subscriptions not resolved because the layout budget ran out.
+    over_budget: u64,
 }
 
 /// What an `A` message for a topic resolves to (see [`Sub`]).
@@ -260,27 +527,39 @@ struct Template {
     role: Role,
 }
 
-/// Cache invalidations allowed per file: real logs need none (all formats
-/// precede the subscriptions); the cap keeps a hostile F/A/F/A... file linear.
-const MAX_CACHE_CLEARS: u32 = 64;
-
-impl<'a> Defs<'a> {
-    fn add(&mut self, name: &'a str, fields: Vec<Field<'a>>) {
-        let redefined = self.formats.insert(name, fields).is_some();
+impl Defs {
+    /// A new or redefined format (`bytes`: its `F` payload size).
+    fn add(&mut self, name: &str, fields: Vec<Field>, bytes: usize) {
+        let old = self.formats.get(name).map(|(f, b)| (f.as_ref() == &fields, *b));
+        if old.is_some_and(|(same, _)| same) {
+            return; // identical redefinition: nothing cached changes
+        }
+        let freed = old.map_or(0, |(_, b)| b);
+        if self.format_bytes - freed + bytes > MAX_FORMAT_BYTES {
+            self.dropped += 1;
+            return;
+        }
+        self.format_bytes = self.format_bytes - freed + bytes;
+        self.formats.insert(name.to_string(), (Rc::new(fields), bytes));
         // A redefinition, or a late definition that a failed look-up may have
-        // been waiting for, can change cached results.
-        if (redefined || self.cached_failure) && self.clears < MAX_CACHE_CLEARS {
+        // been waiting for, can change any cached result: drop them all, so a
+        // later subscription always gets the current layout. The budget in
+        // `template` keeps a hostile F/A/F/A... file linear.
+        if old.is_some() || self.cached_failure {
             self.sizes.clear();
             self.templates.clear();
             self.cached_failure = false;
-            self.clears += 1;
         }
     }
 
     /// Subscription template of topic `name` (cached).
-    fn template(&mut self, name: &'a str) -> Option<Template> {
+    fn template(&mut self, name: &str) -> Option<Template> {
         if let Some(t) = self.templates.get(name) {
             return t.clone();
+        }
+        if self.work > self.allow {
+            self.over_budget += 1;
+            return None;
         }
         let t = self.layout(name).and_then(|l| {
             let ts = l.loc("timestamp", 0, 1e6, 1e6)?;
@@ -292,47 +571,49 @@ impl<'a> Defs<'a> {
             })
         });
         self.cached_failure |= t.is_none();
-        self.templates.insert(name, t.clone());
+        self.templates.insert(name.to_string(), t.clone());
         t
     }
 
     /// Size in bytes of a basic or nested type. Memoised so that adversarial
     /// formats (each type using the next one many times) stay linear.
-    fn type_size(&mut self, ty: &'a str, depth: u32) -> Option<usize> {
+    fn type_size(&mut self, ty: &str, depth: u32) -> Option<usize> {
         if let Some(b) = Basic::parse(ty) {
             return Some(b.size());
         }
         if let Some(s) = self.sizes.get(ty) {
             return *s;
         }
-        let fields = self.formats.get(ty)?.clone();
+        let fields = Rc::clone(&self.formats.get(ty)?.0);
         let mut total = Some(0usize);
         if depth > MAX_NESTING {
             total = None;
         }
-        for f in &fields {
+        for f in fields.iter() {
             let Some(t) = total else { break };
+            self.work += 1;
             total = self
-                .type_size(f.ty, depth + 1)
+                .type_size(&f.ty, depth + 1)
                 .and_then(|s| s.checked_mul(f.len))
                 .and_then(|s| t.checked_add(s));
         }
-        self.sizes.insert(ty, total);
+        self.sizes.insert(ty.to_string(), total);
         self.cached_failure |= total.is_none();
         total
     }
 
     /// Top-level layout of a topic: field offsets, full and minimum size.
-    fn layout(&mut self, name: &'a str) -> Option<Layout<'a>> {
-        let fields = self.formats.get(name)?.clone();
+    fn layout(&mut self, name: &str) -> Option<Layout> {
+        let fields = Rc::clone(&self.formats.get(name)?.0);
         let mut out = Vec::with_capacity(fields.len());
         let (mut off, mut min) = (0usize, 0usize);
-        for f in &fields {
-            let size = self.type_size(f.ty, 1)?.checked_mul(f.len)?;
+        for f in fields.iter() {
+            self.work += 1;
+            let size = self.type_size(&f.ty, 1)?.checked_mul(f.len)?;
             out.push(LField {
-                name: f.name,
+                name: f.name.clone(),
                 off,
-                basic: Basic::parse(f.ty),
+                basic: Basic::parse(&f.ty),
                 len: f.len,
             });
             off = off.checked_add(size)?;
@@ -350,23 +631,23 @@ impl<'a> Defs<'a> {
 }
 
 /// A top-level field placed in the message.
-struct LField<'a> {
-    name: &'a str,
+struct LField {
+    name: String,
     off: usize,
     basic: Option<Basic>,
     len: usize,
 }
 
 /// Flattened top level of a topic's format.
-struct Layout<'a> {
-    fields: Vec<LField<'a>>,
+struct Layout {
+    fields: Vec<LField>,
     /// Payload size with all fields, bytes.
     full: usize,
     /// Payload size without trailing `_padding` fields, bytes.
     min: usize,
 }
 
-impl Layout<'_> {
+impl Layout {
     /// Element `idx` of basic field `name`; raw value divided by `int_div`
     /// for integer types or `float_div` for float types.
     fn loc(&self, name: &str, idx: usize, int_div: f64, float_div: f64) -> Option<Loc> {
@@ -549,36 +830,89 @@ const LOG_LEVELS: [&str; 8] = [
     "EMERG", "ALERT", "CRIT", "ERR", "WARNING", "NOTICE", "INFO", "DEBUG",
 ];
 
-struct Parser<'a> {
-    buf: &'a [u8],
-    defs: Defs<'a>,
+/// What goes through the reorder buffer.
+enum Item {
+    Row(Sample),
+    /// An IMU row: gets the latest attitude.
+    Imu(Sample),
+    /// (t s, quaternion w x y z)
+    Att(f64, [f64; 4]),
+}
+
+/// The rows of the second pass, in time order: attitude is put on IMU rows
+/// as they come out of the reorder buffer.
+struct Emit {
+    reorder: Reorder<Item>,
+    /// Latest attitude at or before the rows handed on: (t s, quaternion).
+    att: Option<(f64, [f64; 4])>,
+}
+
+impl Emit {
+    fn push(&mut self, t: f64, rank: u8, item: Item, sink: &mut dyn RowSink) {
+        let att = &mut self.att;
+        self.reorder.push(t, rank, item, &mut |i| Self::out(att, i, sink));
+    }
+
+    fn drain(&mut self, sink: &mut dyn RowSink) {
+        let att = &mut self.att;
+        self.reorder.drain(&mut |i| Self::out(att, i, sink));
+    }
+
+    fn out(att: &mut Option<(f64, [f64; 4])>, item: Item, sink: &mut dyn RowSink) {
+        match item {
+            Item::Att(t, q) => *att = Some((t, q)),
+            Item::Row(row) => sink.row(&row),
+            Item::Imu(mut row) => {
+                if let Some((ta, [w, x, y, z])) = *att {
+                    if row.t - ta <= ATTITUDE_MAX_AGE_S {
+                        (row.qw, row.qx, row.qy, row.qz) = (w, x, y, z);
+                    }
+                }
+                sink.row(&row);
+            }
+        }
+    }
+}
+
+/// Rows per source seen in the second pass (for the end-of-file warnings).
+#[derive(Default)]
+struct Counts {
+    gps: u64,
+    gps_fix: u64,
+    imu: u64,
+    imu_baro: u64,
+    att: u64,
+    baro: u64,
+}
+
+struct Parser {
+    defs: Defs,
+    /// `None` in the first pass: rows are only noted in `seen`.
+    plan: Option<Seen>,
+    seen: Seen,
+    emit: Emit,
+    counts: Counts,
     /// msg_id -> index into `subs` (NO_SUB if none); grows to the largest id seen.
     sub_by_id: Vec<u32>,
     subs: Vec<Sub>,
     /// (topic name, multi_id, data message count).
-    topics: Vec<(&'a str, u8, u64)>,
-    topic_idx: HashMap<(&'a str, u8), usize>,
+    topics: Vec<(Rc<str>, u8, u64)>,
+    topic_idx: HashMap<(Rc<str>, u8), usize>,
     /// Appended-data offsets (ascending, within the file) and the next one.
-    appended: Vec<usize>,
+    appended: Vec<u64>,
     next_appended: usize,
-
-    // rows, kept per source so the choice of source can be made at the end
-    gps_vgp: Vec<Sample>,
-    gps_sensor: Vec<Sample>,
-    imu: Vec<Sample>,
-    /// (t s, quaternion w x y z)
-    att: Vec<(f64, [f64; 4])>,
-    baro_air: Vec<Sample>,
-    baro_sensor: Vec<Sample>,
     /// Absolute time (µs) of the last sensor_combined baro sub-sample.
     last_sc_baro_us: f64,
+    /// Field-visit allowance for layouts at the current message.
+    layout_allow: u64,
 
     // bookkeeping
     messages: u64,
     last_t: f64,
     in_data: bool,
     info: Vec<(String, String)>,
-    multi_info_keys: Vec<&'a str>,
+    info_dropped: u64,
+    multi_info_keys: Vec<String>,
     multi_info_count: u64,
     params_initial: u64,
     params_changed: u64,
@@ -593,6 +927,7 @@ struct Parser<'a> {
     no_sub_data: u64,
     bad_size_data: u64,
     unresolved_subs: u64,
+    topics_dropped: u64,
     bad_formats: u64,
     misplaced_flags: u64,
     resyncs: u64,
@@ -602,28 +937,27 @@ struct Parser<'a> {
     warnings: Vec<String>,
 }
 
-impl<'a> Parser<'a> {
-    fn new(buf: &'a [u8]) -> Self {
+impl Parser {
+    fn new(plan: Option<Seen>) -> Self {
         Parser {
-            buf,
             defs: Defs::default(),
+            plan,
+            seen: Seen::default(),
+            emit: Emit { reorder: Reorder::new(REORDER_ROWS), att: None },
+            counts: Counts::default(),
             sub_by_id: Vec::new(),
             subs: Vec::new(),
             topics: Vec::new(),
             topic_idx: HashMap::new(),
             appended: Vec::new(),
             next_appended: 0,
-            gps_vgp: Vec::new(),
-            gps_sensor: Vec::new(),
-            imu: Vec::new(),
-            att: Vec::new(),
-            baro_air: Vec::new(),
-            baro_sensor: Vec::new(),
             last_sc_baro_us: f64::NAN,
+            layout_allow: LAYOUT_WORK_BASE,
             messages: 0,
             last_t: f64::NAN,
             in_data: false,
             info: Vec::new(),
+            info_dropped: 0,
             multi_info_keys: Vec::new(),
             multi_info_count: 0,
             params_initial: 0,
@@ -639,6 +973,7 @@ impl<'a> Parser<'a> {
             no_sub_data: 0,
             bad_size_data: 0,
             unresolved_subs: 0,
+            topics_dropped: 0,
             bad_formats: 0,
             misplaced_flags: 0,
             resyncs: 0,
@@ -648,87 +983,18 @@ impl<'a> Parser<'a> {
         }
     }
 
-    /// Walk all messages. Every iteration either advances `pos` or consumes
-    /// an appended offset, so the loop always terminates.
-    fn run(&mut self) {
-        let buf = self.buf;
-        let mut pos = HEADER_LEN;
-        loop {
-            let pending = self.appended.get(self.next_appended).copied();
-            if let Some(off) = pending {
-                if pos >= off {
-                    self.next_appended += 1;
-                    continue;
-                }
-            }
-            let rest = buf.get(pos..).unwrap_or(&[]);
-            if rest.is_empty() {
-                break;
-            }
-            let (size, ty) = match *rest {
-                [s0, s1, ty, ..] => (usize::from(u16::from_le_bytes([s0, s1])), ty),
-                _ => (usize::MAX, 0),
-            };
-            let end = pos.saturating_add(3).saturating_add(size);
-            // Appended data: a message running past the next offset was cut
-            // when the log stopped; parsing restarts at the offset (spec).
-            if let Some(off) = pending {
-                if end > off {
-                    pos = off;
-                    self.next_appended += 1;
-                    continue;
-                }
-            }
-            let Some(payload) = buf.get(pos.saturating_add(3)..end) else {
-                self.warnings.push(format!(
-                    "file truncated: last message at byte {pos} incomplete ({} bytes ignored)",
-                    rest.len()
-                ));
-                break;
-            };
-            let known = self.handle(pos, ty, payload);
-            if known {
-                self.messages += 1;
-                pos = end;
-            } else if ty == 0 || size == 0 || size > MAX_PLAUSIBLE_UNKNOWN_SIZE {
-                // Implausible header: resync on the next sync marker, or
-                // crawl byte by byte if the file has none left (pyulog's way).
-                let from = pos + 1;
-                let found = if self.has_sync {
-                    find_sync(buf, from)
-                } else {
-                    None
-                };
-                self.resyncs += 1;
-                match found {
-                    Some(next) => {
-                        self.skipped_bytes += (next - pos) as u64;
-                        pos = next;
-                    }
-                    None => {
-                        self.has_sync = false;
-                        self.skipped_bytes += 1;
-                        pos = from;
-                    }
-                }
-            } else {
-                // A message type newer than this reader: skip it.
-                self.unknown_types += 1;
-                pos = end;
-            }
-        }
-    }
-
-    /// Handle one message; false when its type is unknown.
-    fn handle(&mut self, pos: usize, ty: u8, p: &'a [u8]) -> bool {
+    /// Handle one message; false when its type is unknown. `total`: the file
+    /// length when known (to check appended-data offsets).
+    fn handle(&mut self, pos: u64, ty: u8, p: &[u8], total: Option<u64>, sink: &mut dyn RowSink) -> bool {
         match ty {
-            b'D' => self.data(p),
+            b'D' => self.data(p, sink),
             b'F' => match parse_format(p) {
-                Some((name, fields)) => self.defs.add(name, fields),
+                Some((name, fields)) => self.defs.add(name, fields, p.len()),
                 None => self.bad_formats += 1,
             },
             b'A' => {
                 self.in_data = true;
+                self.defs.allow = self.layout_allow;
                 self.subscribe(p);
             }
             b'R' => {
@@ -738,12 +1004,16 @@ impl<'a> Parser<'a> {
                     }
                 }
             }
-            b'B' => self.flag_bits(pos, p),
+            b'B' => self.flag_bits(pos, p, total),
             b'I' => {
                 // Old logs put perf-counter dumps in `I` messages: not metadata.
                 if let Some((k, mut v)) = key_value(p).filter(|(k, _)| !k.starts_with("perf_")) {
-                    truncate_utf8(&mut v, MAX_INFO_BYTES);
-                    self.info.push((k.to_string(), v));
+                    if self.info.len() < MAX_INFO {
+                        truncate_utf8(&mut v, MAX_INFO_BYTES);
+                        self.info.push((k.to_string(), v));
+                    } else {
+                        self.info_dropped += 1;
+                    }
                 }
             }
             b'M' => self.multi_info(p),
@@ -781,7 +1051,7 @@ impl<'a> Parser<'a> {
 
     /// The hot path: one data message.
     #[inline]
-    fn data(&mut self, p: &[u8]) {
+    fn data(&mut self, p: &[u8], sink: &mut dyn RowSink) {
         self.in_data = true;
         let Some(id) = le::<2>(p, 0).map(u16::from_le_bytes) else {
             self.bad_size_data += 1;
@@ -816,13 +1086,25 @@ impl<'a> Parser<'a> {
         if t.is_nan() || t <= 0.0 {
             return;
         }
+        let Some(plan) = self.plan else {
+            match &sub.role {
+                Role::Gps(GpsSrc::VehicleGpsPosition, _) => self.seen.vgp = true,
+                Role::Gps(GpsSrc::SensorGps, _) => self.seen.sensor_gps = true,
+                Role::Baro(BaroSrc::AirData, _) => self.seen.air = true,
+                Role::Baro(BaroSrc::SensorBaro, _) => self.seen.sensor_baro = true,
+                _ => {}
+            }
+            return;
+        };
         match &sub.role {
             Role::Other => {}
             Role::Gps(src, m) => {
-                let row = m.decode(t, d);
-                match src {
-                    GpsSrc::VehicleGpsPosition => self.gps_vgp.push(row),
-                    GpsSrc::SensorGps => self.gps_sensor.push(row),
+                // vehicle_gps_position (the selected receiver) when it has data.
+                if (*src == GpsSrc::VehicleGpsPosition) == plan.vgp {
+                    let row = m.decode(t, d);
+                    self.counts.gps += 1;
+                    self.counts.gps_fix += u64::from(row.has_fix());
+                    self.emit.push(t, RANK_GPS, Item::Row(row), sink);
                 }
             }
             Role::Imu(m) => {
@@ -850,29 +1132,36 @@ impl<'a> Parser<'a> {
                         }
                     }
                 }
-                self.imu.push(s);
+                self.counts.imu += 1;
+                self.counts.imu_baro += u64::from(s.has_baro());
+                // A dedicated baro topic replaces the embedded one.
+                if plan.air || plan.sensor_baro {
+                    s.baro = f64::NAN;
+                }
+                self.emit.push(t, RANK_IMU, Item::Imu(s), sink);
             }
             Role::Att(q) => {
                 let q = q.map(|l| val(l, d));
                 // Skip uninitialised (zero) or garbage quaternions.
                 let n2: f64 = q.iter().map(|v| v * v).sum();
                 if (0.8..1.2).contains(&n2) {
-                    self.att.push((t, q));
+                    self.counts.att += 1;
+                    self.emit.push(t, RANK_ATT, Item::Att(t, q), sink);
                 }
             }
             Role::Baro(src, loc) => {
-                let mut s = Sample::at(t);
-                s.baro = val(Some(*loc), d);
-                match src {
-                    BaroSrc::AirData => self.baro_air.push(s),
-                    BaroSrc::SensorBaro => self.baro_sensor.push(s),
+                if (*src == BaroSrc::AirData) == plan.air {
+                    let mut s = Sample::at(t);
+                    s.baro = val(Some(*loc), d);
+                    self.counts.baro += 1;
+                    self.emit.push(t, RANK_BARO, Item::Row(s), sink);
                 }
             }
         }
     }
 
     /// `A`: `[u8 multi_id][u16 msg_id][name]`.
-    fn subscribe(&mut self, p: &'a [u8]) {
+    fn subscribe(&mut self, p: &[u8]) {
         let (Some(&multi_id), Some(id)) = (p.first(), le::<2>(p, 1).map(u16::from_le_bytes)) else {
             return;
         };
@@ -889,12 +1178,16 @@ impl<'a> Parser<'a> {
             self.unresolved_subs += 1;
             return;
         };
-        let topic = match self.topic_idx.get(&(name, multi_id)) {
+        let key: (Rc<str>, u8) = (Rc::from(name), multi_id);
+        let topic = match self.topic_idx.get(&key) {
             Some(&i) => i,
+            None if self.topics.len() >= MAX_TOPICS => {
+                self.topics_dropped += 1;
+                return;
+            }
             None => {
-                self.topics.push((name, multi_id, 0));
-                self.topic_idx
-                    .insert((name, multi_id), self.topics.len() - 1);
+                self.topics.push((Rc::clone(&key.0), multi_id, 0));
+                self.topic_idx.insert(key, self.topics.len() - 1);
                 self.topics.len() - 1
             }
         };
@@ -925,9 +1218,9 @@ impl<'a> Parser<'a> {
     }
 
     /// `B`: `[u8 compat[8]][u8 incompat[8]][u64 appended_offsets[3]]`; only
-    /// valid as the first message.
-    fn flag_bits(&mut self, pos: usize, p: &[u8]) {
-        if pos != HEADER_LEN {
+    /// valid as the first message. `total`: file length when known.
+    fn flag_bits(&mut self, pos: u64, p: &[u8], total: Option<u64>) {
+        if pos != HEADER_LEN as u64 {
             self.misplaced_flags += 1;
             return;
         }
@@ -951,28 +1244,25 @@ impl<'a> Parser<'a> {
             if off == 0 {
                 break;
             }
-            match usize::try_from(off) {
-                Ok(o) if o > last && o <= self.buf.len() => {
-                    self.appended.push(o);
-                    last = o;
-                }
-                _ => self
-                    .warnings
-                    .push(format!("bad appended-data offset {off} ignored")),
+            if off > last && total.is_none_or(|n| off <= n) {
+                self.appended.push(off);
+                last = off;
+            } else {
+                self.warnings.push(format!("bad appended-data offset {off} ignored"));
             }
         }
     }
 
     /// `M`: `[u8 is_continued][u8 key_len][key][value]`. The values are
     /// bulky text (perf dumps, boot console), so only the keys are kept.
-    fn multi_info(&mut self, p: &'a [u8]) {
+    fn multi_info(&mut self, p: &[u8]) {
         let Some((name, _)) = p.get(1..).and_then(key_value) else {
             return;
         };
         self.multi_info_count += 1;
         // Bounded so a hostile file cannot make this quadratic.
-        if self.multi_info_keys.len() < 32 && !self.multi_info_keys.contains(&name) {
-            self.multi_info_keys.push(name);
+        if self.multi_info_keys.len() < 32 && !self.multi_info_keys.iter().any(|k| k == name) {
+            self.multi_info_keys.push(name.to_string());
         }
     }
 
@@ -987,15 +1277,19 @@ impl<'a> Parser<'a> {
         }
         let t = le::<8>(ts, 0).map_or(0, u64::from_le_bytes) as f64 * 1e-6;
         let name = LOG_LEVELS.get(lvl).copied().unwrap_or("?");
-        let text = String::from_utf8_lossy(trim_nul(msg));
+        let mut text = String::from_utf8_lossy(trim_nul(msg)).trim_end().to_string();
+        truncate_utf8(&mut text, MAX_INFO_BYTES);
         self.log_lines.push((
             "log".to_string(),
-            format!("t={t:.3}s {name}: {}", text.trim_end()),
+            format!("t={t:.3}s {name}: {text}"),
         ));
     }
 
-    /// Assemble the rows and the report.
-    fn finish(mut self, version: u8, start_us: u64) -> LogData {
+    /// Drain the rows and assemble the report.
+    fn finish(mut self, version: u8, start_us: u64, sink: &mut dyn RowSink) -> LogSummary {
+        self.emit.drain(sink);
+        let plan = self.plan.unwrap_or_default();
+        let c = &self.counts;
         let mut warnings = std::mem::take(&mut self.warnings);
         let mut missing = Vec::new();
         let mut meta = vec![("ulog_version".to_string(), version.to_string())];
@@ -1030,65 +1324,30 @@ impl<'a> Parser<'a> {
         ));
         meta.push(("sync_count".to_string(), self.syncs.to_string()));
 
-        // GPS: prefer vehicle_gps_position (the selected receiver).
-        let (gps, gps_name) = if !self.gps_vgp.is_empty() {
-            (std::mem::take(&mut self.gps_vgp), "vehicle_gps_position")
-        } else {
-            (std::mem::take(&mut self.gps_sensor), "sensor_gps")
-        };
-        if gps.is_empty() {
+        // GPS: vehicle_gps_position (the selected receiver) if it had data.
+        if c.gps == 0 {
             missing.push("gps".to_string());
             warnings
                 .push("no GPS topic (vehicle_gps_position or sensor_gps) with data".to_string());
         } else {
+            let gps_name = if plan.vgp { "vehicle_gps_position" } else { "sensor_gps" };
             meta.push(("gps_topic".to_string(), gps_name.to_string()));
-            if !gps.iter().any(Sample::has_fix) {
+            if c.gps_fix == 0 {
                 warnings.push(
                     "GPS unavailable: GPS never had a fix (fix_type < 2 throughout)".to_string(),
                 );
             }
         }
-
-        // IMU rows carry the latest attitude (sorted sweep).
-        let mut imu = std::mem::take(&mut self.imu);
-        imu.sort_by(|a, b| a.t.total_cmp(&b.t));
-        self.att.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut j = 0;
-        let mut cur: Option<(f64, [f64; 4])> = None;
-        for row in &mut imu {
-            while let Some(&a) = self.att.get(j) {
-                if a.0 > row.t {
-                    break;
-                }
-                cur = Some(a);
-                j += 1;
-            }
-            if let Some((ta, [w, x, y, z])) = cur {
-                if row.t - ta <= ATTITUDE_MAX_AGE_S {
-                    (row.qw, row.qx, row.qy, row.qz) = (w, x, y, z);
-                }
-            }
-        }
-        if imu.is_empty() {
+        if c.imu == 0 {
             missing.push("imu".to_string());
             warnings.push("no IMU topic (sensor_combined) with data".to_string());
         }
-        if self.att.is_empty() {
+        if c.att == 0 {
             missing.push("attitude".to_string());
             warnings.push("no attitude topic (vehicle_attitude) with data".to_string());
         }
-
         // Baro: dedicated topic if any, else what sensor_combined carried.
-        let baro = if !self.baro_air.is_empty() {
-            std::mem::take(&mut self.baro_air)
-        } else {
-            std::mem::take(&mut self.baro_sensor)
-        };
-        if !baro.is_empty() {
-            for r in &mut imu {
-                r.baro = f64::NAN;
-            }
-        } else if !imu.iter().any(Sample::has_baro) {
+        if c.baro == 0 && c.imu_baro == 0 {
             missing.push("baro".to_string());
             warnings.push("no baro topic (vehicle_air_data or sensor_baro) with data".to_string());
         }
@@ -1100,91 +1359,50 @@ impl<'a> Parser<'a> {
                 self.dropout_ms as f64 * 1e-3
             ));
         }
-        if self.resyncs > 0 {
-            warnings.push(format!(
-                "corrupt data: {} resyncs, {} bytes skipped",
-                self.resyncs, self.skipped_bytes
-            ));
-        }
-        if self.unknown_types > 0 {
-            warnings.push(format!(
-                "{} messages of unknown type skipped",
-                self.unknown_types
-            ));
-        }
-        if self.no_sub_data > 0 {
-            warnings.push(format!(
-                "{} data messages without a subscription skipped",
-                self.no_sub_data
-            ));
-        }
-        if self.bad_size_data > 0 {
-            warnings.push(format!(
-                "{} data messages of the wrong size skipped",
-                self.bad_size_data
-            ));
-        }
-        if self.unresolved_subs > 0 {
-            warnings.push(format!(
-                "{} subscriptions with an unknown or unresolvable format ignored",
-                self.unresolved_subs
-            ));
-        }
-        if self.bad_formats > 0 {
-            warnings.push(format!(
-                "{} unparsable format definitions ignored",
-                self.bad_formats
-            ));
-        }
-        if self.misplaced_flags > 0 {
-            warnings.push(format!(
-                "{} flag-bits messages not at the start ignored",
-                self.misplaced_flags
-            ));
+        let counted = [
+            (self.resyncs, format!("corrupt data: {} resyncs, {} bytes skipped", self.resyncs, self.skipped_bytes)),
+            (self.unknown_types, format!("{} messages of unknown type skipped", self.unknown_types)),
+            (self.no_sub_data, format!("{} data messages without a subscription skipped", self.no_sub_data)),
+            (self.bad_size_data, format!("{} data messages of the wrong size skipped", self.bad_size_data)),
+            (self.unresolved_subs, format!("{} subscriptions with an unknown or unresolvable format ignored", self.unresolved_subs)),
+            (self.bad_formats, format!("{} unparsable format definitions ignored", self.bad_formats)),
+            (self.misplaced_flags, format!("{} flag-bits messages not at the start ignored", self.misplaced_flags)),
+            (self.defs.over_budget, format!("{} of those subscriptions not resolved because format redefinitions passed the layout work limit", self.defs.over_budget)),
+            (self.defs.dropped, format!("{} format definitions ignored: over the {} MiB limit on formats", self.defs.dropped, MAX_FORMAT_BYTES >> 20)),
+            (self.topics_dropped, format!("{} subscriptions ignored: over the limit of {MAX_TOPICS} topic instances", self.topics_dropped)),
+            (self.emit.reorder.late, format!("{} rows dropped: more than {REORDER_ROWS} rows out of time order", self.emit.reorder.late)),
+            (self.info_dropped, format!("{} info messages not kept in meta (at most {MAX_INFO} are)", self.info_dropped)),
+        ];
+        for (n, w) in counted {
+            if n > 0 {
+                warnings.push(w);
+            }
         }
         meta.append(&mut self.log_lines);
-
-        // Rows: concatenated sorted runs; the stable sort keeps GPS before
-        // IMU before baro at equal t.
-        let mut samples = Vec::with_capacity(gps.len() + imu.len() + baro.len());
-        samples.extend(gps);
-        samples.extend(imu);
-        samples.extend(baro);
-        samples.sort_by(|a, b| a.t.total_cmp(&b.t));
 
         let mut topic_counts: Vec<(String, u64)> = self
             .topics
             .iter()
             .filter(|t| t.2 > 0)
-            .map(|&(name, mid, n)| {
-                let key = if mid == 0 {
+            .map(|(name, mid, n)| {
+                let key = if *mid == 0 {
                     name.to_string()
                 } else {
                     format!("{name}/{mid}")
                 };
-                (key, n)
+                (key, *n)
             })
             .collect();
         topic_counts.sort();
 
-        LogData {
+        LogSummary {
             format: "ulog",
-            samples,
             meta,
             warnings,
             missing,
             topic_counts,
         }
     }
-}
-
-/// Position just after the next sync marker at or after `from`.
-fn find_sync(buf: &[u8], from: usize) -> Option<usize> {
-    let hay = buf.get(from..)?;
-    let i = hay
-        .windows(SYNC_MAGIC.len())
-        .position(|w| w == SYNC_MAGIC)?;
-    Some(from + i + SYNC_MAGIC.len())
 }
 
 /// `I`/`P`-style `[u8 key_len]["type name"][value]` -> (name, value as text).
