@@ -370,11 +370,6 @@ struct PvTest {
     inc_cap: usize,
     /// Statistic of the current epoch, NaN when not observed this epoch.
     stat: f64,
-    /// While a position fault is judged: the clipped mismatch summed from
-    /// the start of the window that caught it (per axis) and its epoch
-    /// count. The window forgets a slow ramp's early part; this sum does
-    /// not, so the statistic keeps growing for as long as the ramp lasts.
-    held: Option<([f64; 3], usize)>,
 }
 
 /// Initial and floor σ of the window sum `S`, m.
@@ -408,7 +403,6 @@ impl PvTest {
             inc_head: 0,
             inc_cap: cap.div_ceil(4 * PV_WINDOW_FACTOR).clamp(1, 4),
             stat: f64::NAN,
-            held: None,
         }
     }
     fn clear(&mut self) {
@@ -417,7 +411,6 @@ impl PvTest {
         self.sum = [0.0; 3];
         self.since_resum = 0;
         self.stat = f64::NAN;
-        self.held = None;
     }
     fn sigma(&self, a: usize) -> f64 {
         self.ms[a].sqrt().max(PV_FLOOR)
@@ -466,12 +459,6 @@ impl PvTest {
             self.sum[a] += u[a];
         }
         self.head = (self.head + 1) % cap;
-        if let Some((h, n)) = self.held.as_mut() {
-            for a in 0..3 {
-                h[a] += u[a];
-            }
-            *n += 1;
-        }
         self.since_resum += 1;
         if self.since_resum >= cap {
             self.since_resum = 0;
@@ -489,26 +476,10 @@ impl PvTest {
                     z * z
                 })
                 .sum();
-            let window = (z2 / 3.0).sqrt();
-            // The held sum is a longer window: a random walk's spread grows
-            // with √n, so σ_S is scaled by √(n / cap).
-            let held = self.held.map_or(0.0, |(h, n)| {
-                let scale = (n as f64 / cap as f64).max(1.0).sqrt();
-                let z2: f64 = (0..3).map(|a| (h[a] / (self.sigma(a) * scale)).powi(2)).sum();
-                (z2 / 3.0).sqrt()
-            });
-            window.max(held)
+            (z2 / 3.0).sqrt()
         } else {
             f64::NAN
         };
-    }
-    /// Start the held sum from the current (full) window, or stop it.
-    fn set_hold(&mut self, on: bool) {
-        match (on, self.held.is_some()) {
-            (true, false) if self.len == self.ring.len() => self.held = Some((self.sum, self.len)),
-            (false, true) => self.held = None,
-            _ => {}
-        }
     }
     fn accept(&mut self) {
         if self.len == 0 {
@@ -963,11 +934,6 @@ impl IndicatorEngine {
         self.baro_gps.accept();
     }
 
-    /// Hold the position–velocity sum from the current window on while a
-    /// position fault is judged (see `PvTest::held`).
-    pub fn hold_pv(&mut self, on: bool) {
-        self.pv.set_hold(on);
-    }
 
     /// Feed one GPS epoch's `z = v_gps − V` (horizontal N, E; V: the
     /// IMU-predicted velocity changes summed, m/s) at time `t`.
