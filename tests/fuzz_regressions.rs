@@ -45,3 +45,23 @@ fn fuzz_seeds_parse_into_rows_of_every_sensor() {
     let d = read_any(&seed("dataflash/synthetic_cut.bin")).expect("cut dataflash reads partially");
     assert!(d.warnings.iter().any(|w| w.contains("truncated")), "{:?}", d.warnings);
 }
+
+/// The `audit` fuzz target (streamed against whole-bytes audit) found that
+/// a CSV whose every row is rejected (here `gz` renamed, so each IMU row
+/// has `gx` without `gz`) reported no missing inputs on the whole-bytes
+/// path, counted from the parsed rows, but all four on the streaming path,
+/// counted from the rows audited. Both now count the rows audited.
+#[test]
+fn a_csv_whose_rows_are_all_rejected_reports_the_same_missing_inputs_both_ways() {
+    let text = "t,lat,lon,alt,ax,ay,az,gx,gy,ncgz,qw,qx,qy,qz,baro\n\
+                0.00,47.39,8.54,488.0,0.01,-0.02,-9.81,0.001,0.002,-0.001,1,0,0,0,488.2\n\
+                0.02,,,,0.01,-0.02,-9.81,0.001,0.002,-0.001,1,0,0,0,488.3\n";
+    let cfg = navguard::Config::default();
+    let log = read_any(text.as_bytes()).unwrap();
+    let (whole, _) = navguard::audit::audit(&log, &cfg).unwrap();
+    let (streamed, _) = navguard::audit::audit_chunks(text.as_bytes(), &cfg, true, 7).unwrap();
+    assert_eq!(whole.rows, 0);
+    assert_eq!(whole.missing, ["gps", "imu", "attitude", "baro"]);
+    assert_eq!(streamed.missing, whole.missing);
+    assert_eq!(streamed.warnings, whole.warnings);
+}
