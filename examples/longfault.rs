@@ -24,10 +24,6 @@ fn main() {
                     continue;
                 }
                 let in_fault = s.t >= 100.0 && s.t < 100.0 + len;
-                if false {
-                    let i = det.indicators();
-                    println!("{:7.2} st {} k {} f {:5.2} r {:6.2} c {:5.2} pv {:5.2} rg {:?} inc {:?} res {:?}", s.t, o.status, o.kind, o.f, o.r, o.c, i.pv, i.r_group.map(|v| (v * 100.0).round() / 100.0), i.inc_group.map(|v| (v * 100.0).round() / 100.0), det.residuals().map(|v| (v * 100.0).round() / 100.0));
-                }
                 if in_fault {
                     inside += 1;
                     if o.status == 1 {
