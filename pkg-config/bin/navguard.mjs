@@ -10,7 +10,7 @@ import { readFileSync, statSync, closeSync } from 'node:fs';
 import { Worker } from 'node:worker_threads';
 import { availableParallelism } from 'node:os';
 import { createRequire } from 'node:module';
-import { dirname, join } from 'node:path';
+import { dirname, join, relative } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
 import { perSampleHeader, perSampleRows } from '../lib/csv.mjs';
@@ -225,7 +225,8 @@ async function auditDir(dir, opt) {
   if (rows.some((r) => r.verdict === 'faults')) faultsFound = true;
   if (rows.some((r) => r.error)) unreadable = true;
   if (opt.html) {
-    const flights = results.map((r) => (r.error ? { name: r.file, error: r.error } : { name: r.file, report: r.report, series: r.series }));
+    const name = (f) => relative(dir, f) || f;
+    const flights = results.map((r) => (r.error ? { name: name(r.file), error: r.error } : { name: name(r.file), report: r.report, series: r.series }));
     writeHtml(opt.html, flights, files, `navguard fleet report: ${dir}`);
   }
   const summary = { dir, files: files.length, failed: rows.filter((r) => r.error).length, skipped, wallMs: performance.now() - t0, jobs, logs: rows };

@@ -315,10 +315,10 @@ main{max-width:1000px;margin:0 auto;padding:16px 20px 60px}
 h1{font-size:22px;margin:8px 0 4px}h2{font-size:18px;margin:0 0 6px}h3{font-size:15px;margin:18px 0 6px}
 .muted{color:#666}.small{font-size:12px}
 section.flight{background:#fff;border:1px solid #dde;border-radius:8px;padding:14px 18px;margin:18px 0}
-.badge{display:inline-block;padding:2px 10px;border-radius:12px;font-weight:600;font-size:13px;color:#fff}
+.badge{white-space:nowrap;display:inline-block;padding:2px 10px;border-radius:12px;font-weight:600;font-size:13px;color:#fff}
 .v-faults{background:#c62828}.v-clean{background:#2e7d32}.v-no-verdict{background:#757575}.v-unreadable{background:#6d4c41}
 table{border-collapse:collapse;width:100%;font-size:13px;background:#fff}th,td{padding:3px 8px;border-bottom:1px solid #e4e6ea;text-align:left;vertical-align:top}
-th{background:#f0f2f5}td.num,th.num{text-align:right;font-variant-numeric:tabular-nums}
+th{background:#f0f2f5}table.fleet td,table.fleet th{white-space:nowrap}table.fleet td:first-child{white-space:normal;word-break:break-all}td.num,th.num{text-align:right;font-variant-numeric:tabular-nums}
 table.sortable th{cursor:pointer;user-select:none}table.sortable th:after{content:" \\2195";color:#aaa}
 dl.sum{display:grid;grid-template-columns:max-content 1fr;gap:2px 14px;margin:8px 0}dl.sum dt{color:#555}dl.sum dd{margin:0}
 svg.plot{display:block;margin:6px 0;background:#fff}svg.track{display:block;background:#fff}
