@@ -648,7 +648,7 @@ function renderPlots(m, keepX) {
       hooks: { drawAxes: [shadeHook(true)] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v - t0Of(state.result), 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'status', scale: 'k', stroke: 'transparent', width: 0, paths: () => null, points: { show: false }, value: (u, v) => (v == null ? '—' : KIND_NAME[v]) },
     ],
     axes: [tAxis(), yAxis('status', 'k', 3, { values: () => [], ticks: { show: false }, grid: { show: false } }), spacerAxis()],
@@ -664,7 +664,7 @@ function renderPlots(m, keepX) {
       hooks: { drawAxes: [shadeHook(false)] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v - t0Of(state.result), 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'F (-)', scale: 'f', stroke: COLORS.f, width: 1.5, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 3) },
       { label: method === 'anfis' ? `threshold ${thr}` : `fault at 1 (${method})`, scale: 'f', stroke: COLORS.thr, width: 1.25, dash: [6, 4], points: { show: false }, value: (u, v) => fmt(v, 2) },
     ],
@@ -682,7 +682,7 @@ function renderPlots(m, keepX) {
       hooks: { drawAxes: [shadeHook(false)] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v - t0Of(state.result), 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'R (-)', scale: 'r', stroke: COLORS.r, width: 1.25, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 2) },
       { label: 'C (-)', scale: 'c', stroke: COLORS.c, width: 1.25, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 3) },
     ],
@@ -701,7 +701,7 @@ function renderPlots(m, keepX) {
       hooks: { drawAxes: [shadeHook(false)] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v - t0Of(state.result), 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'satellites (-)', scale: 'n', stroke: COLORS.sats, width: 1.5, paths: stepped, points: { show: false }, value: (u, v) => (v == null ? '—' : String(v)) },
       { label: 'fix type (-)', scale: 'n', stroke: COLORS.fix, width: 1.5, paths: stepped, points: { show: false }, value: (u, v) => (v == null ? '—' : String(v)) },
       { label: qualityLabel(m.report), scale: 'm', stroke: COLORS.eph, width: 1.25, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 2) },
@@ -752,7 +752,7 @@ function residualPlot(host, res, axisLabel, unit, series, last) {
       hooks: { drawAxes: [shadeHook(false)], draw: [clipMarks] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v - t0Of(state.result), 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       ...series.map(([name, color], i) => ({
         label: `${name} (${unit})`,
         scale: 'y',

@@ -219,6 +219,8 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
     const html = await readFile(await dh.path(), 'utf8');
     await assertOfflineReport(html, rows.length, join(artifacts, 'page-report.png'));
 
+    // the export clicks scrolled the page: back to the top
+    await page.evaluate(() => window.scrollTo(0, 0));
     const shot = join(artifacts, 'page.png');
     await page.screenshot({ path: shot, fullPage: true });
     // The README's picture is refreshed on request only, so a test run
