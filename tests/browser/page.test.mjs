@@ -9,6 +9,7 @@ import { readFile, mkdir, copyFile, access } from 'node:fs/promises';
 import { join, extname, normalize, dirname, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { createRequire } from 'node:module';
+import { openOffline } from './offline.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repoRoot = join(here, '..', '..');
@@ -236,20 +237,8 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
 /** Open an HTML report with every network request aborted: it must need
  * none, list `nIntervals` intervals, and draw its plots and track. */
 async function assertOfflineReport(html, nIntervals, shot) {
-  const ctx = await browser.newContext({ viewport: { width: 1100, height: 900 } });
-  const requests = [];
-  await ctx.route('**/*', (route) => {
-    const url = route.request().url();
-    if (url === 'http://report.invalid/') return route.fulfill({ status: 200, contentType: 'text/html', body: html });
-    requests.push(url);
-    return route.abort();
-  });
-  const page = await ctx.newPage();
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(e.message));
-  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  const { ctx, page, requests, errors } = await openOffline(browser, { html });
   try {
-    await page.goto('http://report.invalid/');
     assert.deepEqual(requests, [], 'the report fetched something');
     assert.equal(await page.$$eval('table.faults tr.interval', (t) => t.length), nIntervals);
     const plots = await page.$$eval('svg.plot', (ss) => ss.map((s) => ({ id: s.id, n: Array.from(s.querySelectorAll('path.ln')).map((p) => Number(p.dataset.n)) })));

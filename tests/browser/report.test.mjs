@@ -11,6 +11,7 @@ import { tmpdir } from 'node:os';
 import { join, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { createRequire } from 'node:module';
+import { openOffline } from './offline.mjs';
 
 const repoRoot = join(dirname(fileURLToPath(import.meta.url)), '..', '..');
 const cli = join(repoRoot, 'pkg', 'bin', 'navguard.mjs');
@@ -28,31 +29,12 @@ before(async () => {
 });
 after(async () => { if (browser) await browser.close(); });
 
-/** Open `file` with every request but the file itself aborted. */
-async function openOffline(file) {
-  const ctx = await browser.newContext({ viewport: { width: 1100, height: 900 } });
-  const requests = [];
-  await ctx.route('**/*', (route) => {
-    const url = route.request().url();
-    if (url.startsWith('file://')) return route.continue();
-    requests.push(url);
-    return route.abort();
-  });
-  const page = await ctx.newPage();
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(e.message));
-  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-  page.on('requestfailed', (r) => errors.push(`requestfailed ${r.url()}`));
-  await page.goto(`file://${file}`);
-  return { ctx, page, requests, errors };
-}
-
 test('report FILE --html: offline, the intervals with their times, plots with data, the track, modes and messages', async () => {
   const log = join(data, 'ardupilot', 'Loiter_RTL.bin');
   const out = join(tmp, 'loiter.html');
   navguard('report', log, '--html', out);
   const json = JSON.parse(navguard('audit', log, '--json'));
-  const { ctx, page, requests, errors } = await openOffline(out);
+  const { ctx, page, requests, errors } = await openOffline(browser, { file: out });
   try {
     assert.deepEqual(requests, []);
     assert.equal(await page.$eval('section.flight', (s) => s.dataset.verdict), 'faults');
@@ -92,7 +74,7 @@ test('audit ../shared/data --html: every log (recursive) in a sortable table lin
   navguard('audit', data, '--html', out, '--jobs', '2');
   const json = JSON.parse(navguard('audit', data, '--json', '--jobs', '2'));
   assert.ok(json.logs.length >= 13 && json.logs.some((l) => l.file.includes('/px4/')) && json.logs.some((l) => l.file.includes('/ardupilot/')));
-  const { ctx, page, requests, errors } = await openOffline(out);
+  const { ctx, page, requests, errors } = await openOffline(browser, { file: out });
   try {
     assert.deepEqual(requests, []);
     const rows = await page.$$eval('table.fleet tbody tr', (trs) => trs.map((tr) => ({ verdict: tr.dataset.verdict, name: tr.cells[0].textContent, href: tr.querySelector('a').getAttribute('href') })));
