@@ -486,16 +486,19 @@ function drawEvents(u, r, named) {
   ctx.setLineDash([]);
 }
 
+// Scales whose range is robust (percentiles), so points may fall outside.
+const ROBUST_SCALES = new Set(['y', 'm']);
+
 // Points outside a plot's robust y range: a small triangle at the edge.
 function clipMarks(u) {
   const { ctx } = u;
   const { left, top, width, height } = u.bbox;
-  const { min, max } = u.scales.y;
   const pr = devicePixelRatio || 1;
   let n = 0;
   ctx.save();
   for (let s = 1; s < u.series.length; s++) {
-    if (!u.series[s].show || u.series[s].scale !== 'y') continue;
+    if (!u.series[s].show || !ROBUST_SCALES.has(u.series[s].scale)) continue;
+    const { min, max } = u.scales[u.series[s].scale];
     const xs = u.data[0], ys = u.data[s];
     ctx.fillStyle = u.series[s]._stroke || u.series[s].stroke || '#111';
     for (let i = 0; i < ys.length; i++) {
@@ -696,9 +699,10 @@ function renderPlots(m, keepX) {
     ...baseTimeOpts('GPS', 190, {
       scales: {
         n: { range: (u, lo, hi) => [0, Math.max(4, Math.ceil((hi ?? 0) + 1))] },
-        m: { range: (u, lo, hi) => [0, Math.max(2, (hi ?? 0) * 1.1)] },
+        // HDOP 99.99 ("unknown") or one wild eph must not flatten the line
+        m: { range: (u, lo, hi) => [0, Math.max(2, robustRange(u.data[3].filter((v) => v != null))[1])] },
       },
-      hooks: { drawAxes: [shadeHook(false)] },
+      hooks: { drawAxes: [shadeHook(false)], draw: [clipMarks] },
     }),
     series: [
       { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
