@@ -253,6 +253,13 @@ async function assertOfflineReport(html, nIntervals, shot) {
   }
 }
 
+/** Drop a CSV (lines) onto the page as a file named `name`. */
+const dropText = (page, name, lines) => page.evaluate(([n, text]) => {
+  const dt = new DataTransfer();
+  dt.items.add(new File([text], n, { type: 'text/csv' }));
+  window.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+}, [name, lines.join('\n') + '\n']);
+
 test('one spike does not set the residual axis; a log with no GPS says what was still checked', async () => {
   const { page, errors } = await openPage();
   try {
@@ -267,11 +274,7 @@ test('one spike does not set the residual axis; a log with no GPS says what was 
         lines.push(`${t.toFixed(2)},${(31.94 + north / 111320).toFixed(9)},118.79,50,5,0,0,3,11,0.9${imu}`);
       } else lines.push(`${t.toFixed(2)},,,,,,,,,${imu}`);
     }
-    await page.evaluate((text) => {
-      const dt = new DataTransfer();
-      dt.items.add(new File([text], 'spike.csv', { type: 'text/csv' }));
-      window.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
-    }, lines.join('\n') + '\n');
+    await dropText(page, 'spike.csv', lines);
     await waitDone(page);
     const y = await page.evaluate(() => { const u = window.navguard.plots[4]; return { min: u.scales.y.min, max: u.scales.y.max, clipped: u._clipped, lo: Math.min(...u.data[1].filter((v) => v != null)) }; });
     assert.ok(y.lo < -15, `the spike is in the data: ${JSON.stringify(y)}`);
@@ -281,11 +284,7 @@ test('one spike does not set the residual axis; a log with no GPS says what was 
     // IMU and baro only: no verdict, and the page says what was checked
     const imuOnly = ['t,ax,ay,az,gx,gy,gz,qw,qx,qy,qz,baro'];
     for (let i = 0; i < 500; i++) imuOnly.push(`${(i / 50).toFixed(2)},0,0,-9.81,0,0,0,1,0,0,0,10`);
-    await page.evaluate((text) => {
-      const dt = new DataTransfer();
-      dt.items.add(new File([text], 'imu-only.csv', { type: 'text/csv' }));
-      window.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
-    }, imuOnly.join('\n') + '\n');
+    await dropText(page, 'imu-only.csv', imuOnly);
     await page.waitForFunction(() => document.querySelector('#verdict').dataset.verdict === 'no verdict', null, { timeout: 60000 });
     const v = await page.textContent('#verdict');
     assert.match(v, /^no verdictNo verdict: no GPS fix in this log/);
