@@ -10,6 +10,7 @@ use crate::indicators::DRIVER_NAMES;
 use crate::logs::csv::CsvReader;
 use crate::logs::dataflash::DataflashStream;
 use crate::logs::ulog::UlogStream;
+use crate::logs::extras::{iso_utc, EphSource, Extras, LogMessage, ModeChange};
 use crate::logs::{sniff, Format, LogData, LogSummary, RowSink, FEED_CHUNK};
 use crate::metrics::{self, Metrics};
 use crate::sample::Sample;
@@ -170,6 +171,35 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub metrics: Option<Metrics>,
     pub stats: crate::detector::Stats,
+    /// Boot-clock s of the first row: a time minus this is the time since
+    /// the log's start, as reports show it.
+    pub start_t: f64,
+    /// UTC of the first row, ISO 8601 ("2014-11-06T16:02:14.000Z"), when the
+    /// log carries GPS time (DataFlash GWk/GMS, ULog time_utc_usec).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_utc: Option<String>,
+    /// What the receiver-quality column `eph` holds: "eph" (m), "hdop"
+    /// (unitless; DataFlash logs without GPA) or "none".
+    pub eph_source: EphSource,
+    /// Flight-mode changes (boot-clock s), at most 256.
+    pub modes: Vec<ModeChange>,
+    /// The autopilot's own messages (boot-clock s), at most 256.
+    pub messages: Vec<LogMessage>,
+}
+
+impl Report {
+    /// The log's extras (modes, messages, UTC, eph kind) into the report;
+    /// they change no verdict.
+    fn with_extras(mut self, x: &Extras) -> Report {
+        self.start_utc = x.utc_at_boot.map(|u| iso_utc(u + self.start_t));
+        self.eph_source = x.eph_source;
+        self.modes = x.modes.clone();
+        self.messages = x.messages.clone();
+        if x.dropped > 0 {
+            self.warnings.push(format!("{} flight modes and autopilot messages not listed (at most 256 of each are)", x.dropped));
+        }
+        self
+    }
 }
 
 /// Per-row outputs in columns.
@@ -319,6 +349,11 @@ impl Tally {
             meta,
             metrics: metrics.any_label.then(|| metrics.metrics()),
             stats: st,
+            start_t: first_t.unwrap_or(0.0),
+            start_utc: None,
+            eph_source: EphSource::None,
+            modes: vec![],
+            messages: vec![],
         }
     }
 }
@@ -436,7 +471,7 @@ impl<L: Borrow<LogData>> AuditRun<L> {
         // rejected is missing (found by the fuzz target that compares the
         // two paths).
         let missing = if log.format == "csv" { self.tally.missing() } else { log.missing.clone() };
-        let report = self.tally.report(log.format, missing, log.meta.clone());
+        let report = self.tally.report(log.format, missing, log.meta.clone()).with_extras(&log.extras);
         (report, self.cols)
     }
 }
@@ -610,7 +645,7 @@ impl StreamAudit {
                 res.map_err(|e| not_csv(&r, e))?;
                 self.drain();
                 let meta = r.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
-                LogSummary { format: "csv", meta, warnings: core::mem::take(&mut r.warnings), missing: self.tally.missing(), topic_counts: vec![] }
+                LogSummary { format: "csv", meta, warnings: core::mem::take(&mut r.warnings), missing: self.tally.missing(), topic_counts: vec![], extras: r.extras() }
             }
             Source::Ulog(r) => {
                 if r.is_planning() {
@@ -624,10 +659,10 @@ impl StreamAudit {
                 r.finish(&mut feed)?
             }
         };
-        let LogSummary { format, meta, mut warnings, missing, .. } = summary;
+        let LogSummary { format, meta, mut warnings, missing, extras, .. } = summary;
         warnings.append(&mut self.tally.warnings);
         self.tally.warnings = warnings;
-        Ok((self.tally.report(format, missing, meta), self.out))
+        Ok((self.tally.report(format, missing, meta).with_extras(&extras), self.out))
     }
 }
 
