@@ -16,7 +16,7 @@
 use navguard::audit::audit;
 use navguard::compare::battery;
 use navguard::config::Config;
-use navguard::detector::{Detector, Model};
+use navguard::detector::Detector;
 use navguard::logs::read_any;
 use navguard::methods::Method;
 use navguard::sim::{preset_names, simulate, Scenario};
@@ -137,7 +137,7 @@ fn sim() -> Result<(), String> {
     // Oracle runs: the trainer drives the detector with decisions forced to
     // the labels.
     let refs: Vec<&[navguard::Sample]> = streams.iter().map(|r| r.as_slice()).collect();
-    let model = Model::train(&refs, &Config::default(), 7)?;
+    let model = navguard::calibrate::train_model(&refs, &Config::default(), 7)?;
     let mut h = Fnv::new();
     h.str(&format!("{:?}", model));
     println!("trained model\t{}\t{}\t{:016x}", model.d1.len(), model.d2.len(), h.0);

@@ -983,7 +983,7 @@ pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] fil
         streams.push(log.samples);
     }
     let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
-    let model = Model::train(&refs, &cfg, 42).map_err(err)?;
+    let model = crate::calibrate::train_model(&refs, &cfg, 42).map_err(err)?;
     serde_wasm_bindgen::to_value(&model).map_err(err)
 }
 

@@ -546,7 +546,7 @@ mod tests {
         let model = default_model().unwrap();
         let span = model.span();
         let mut mon = GanMonitor::new(model);
-        let mut rng = crate::sim::Rng::new(5);
+        let mut rng = crate::rng::Rng::new(5);
         let mut last = Vec::new();
         for k in 0..(span + 5) {
             let lam: Vec<f64> = (0..4).map(|i| rng.normal() + if i == 2 && k > span / 2 { 4.0 } else { 0.0 }).collect();

@@ -17,7 +17,7 @@ use super::fdi::{rdpop, Action, FdsrConfig, FilterPredictor, Reconfigurator, Str
 use super::tc_ekf::{quat_exp, EkfConfig, ImuNoise, NavState, PrMeas, TcEkf, Vec17, GRAVITY, N};
 use super::stream::{EpochRow, InitialState, PrObs};
 use super::TightError;
-use crate::sim::Rng;
+use crate::rng::Rng;
 
 /// Fault types of Table 4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
