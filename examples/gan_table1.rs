@@ -2,7 +2,8 @@
 //! input series (the same analysis `navguard-gan train` prints):
 //! `cargo run --release --example gan_table1`.
 use navguard::tight::chaos::{analyze, table1_markdown, ChaosOptions};
-use navguard::tight::gan_fdsr::{input_series, GanInput};
+use navguard::tight::gan_fdsr::GanInput;
+use navguard::tight::gan_fdsr_train::input_series;
 use navguard::tight::scenario::{environments, SimConfig, World};
 
 fn main() -> Result<(), navguard::tight::TightError> {

@@ -16,7 +16,8 @@ use std::time::Instant;
 
 use navguard::tight::chaos::table1_markdown;
 use navguard::tight::fdi::{FdsrConfig, Strategy};
-use navguard::tight::gan_fdsr::{default_model, train_detector, GanDetectorModel, GanInput, GanTrainOptions};
+use navguard::tight::gan_fdsr::{default_model, GanDetectorModel, GanInput};
+use navguard::tight::gan_fdsr_train::{train_detector, GanTrainOptions};
 use navguard::tight::scenario::{environments, run, FaultSpec, FaultType, RunRecord, RunSpec, SimConfig, World};
 
 fn main() -> ExitCode {

@@ -8,7 +8,7 @@ use super::gru::sigmoid;
 use super::net::{DiscNet, GenNet, NetWork};
 use super::{GanConfig, GanModel};
 use crate::rng::Rng;
-use crate::tight::fdi::normal_upper_quantile;
+use crate::tight::stats::normal_upper_quantile;
 use crate::tight::TightError;
 
 /// Detection result for one window.
