@@ -1,11 +1,11 @@
 //! Fingerprints of the detector's verdicts, to prove a refactor changed none.
 //!
-//! `cargo run --release --example verdicts -- FILE...`: the native audit of
+//! `cargo run --release -p navguard-examples --example verdicts -- FILE...`: the native audit of
 //! each file: rows, flagged rows, and an FNV-1a hash over every row's status
 //! and F bits. The Node test `tests/node/determinism.test.mjs` compares it
 //! with the wasm build's.
 //!
-//! `cargo run --release --example verdicts -- --sim`: every preset scenario
+//! `cargo run --release -p navguard-examples --example verdicts -- --sim`: every preset scenario
 //! and every case of the comparison battery over seeds 1..=3, under every
 //! `config.method` (and the ANFIS with a short retraining cycle, so online
 //! learning runs often), plus a model trained on oracle runs. One line per

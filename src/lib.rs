@@ -22,7 +22,6 @@ pub mod rng;
 pub mod sample;
 pub mod sim;
 pub mod thresholds;
-pub mod ugv;
 pub mod tight;
 pub mod snapshot;
 

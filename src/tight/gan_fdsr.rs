@@ -122,7 +122,7 @@ impl GanDetectorModel {
     }
 }
 
-/// The default model, trained by `cargo run --release --bin navguard-tight -- gan-train`
+/// The default model, trained by `cargo run --release -p navguard-examples --bin navguard-gan -- train`
 /// (see `docs/tight.md`) and embedded in the library.
 pub fn default_model() -> Result<GanDetectorModel, TightError> {
     let bytes = include_bytes!("gan_default.bin");

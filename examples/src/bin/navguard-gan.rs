@@ -113,7 +113,7 @@ fn train(mut args: impl Iterator<Item = String>) -> Result<(), String> {
 
 /// The GAN trained on the paper's ρD series (`navguard-gan train --input rhod
 /// --out src/tight/gan_rhod.bin`), for the paper-faithful column of Table 5.
-const PAPER_MODEL: &[u8] = include_bytes!("../tight/gan_rhod.bin");
+const PAPER_MODEL: &[u8] = include_bytes!("../../../src/tight/gan_rhod.bin");
 
 struct Cell {
     delays: Vec<Option<f64>>,
