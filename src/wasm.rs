@@ -829,7 +829,7 @@ pub fn tight_gan_train(
     #[wasm_bindgen(unchecked_param_type = "GanTrainOptions | undefined")] options: JsValue,
     #[wasm_bindgen(unchecked_param_type = "((p: GanTrainProgress) => boolean | void) | undefined")] on_progress: JsValue,
 ) -> Result<JsValue, JsError> {
-    use crate::tight::gan_fdsr::{train_detector, GanTrainOptions};
+    use crate::tight::gan_fdsr_train::{train_detector, GanTrainOptions};
     use crate::tight::scenario::{environments, SimConfig, World};
     let mut opts = GanTrainOptions::default();
     // Small by default: the page trains in seconds, not minutes.
@@ -988,7 +988,7 @@ pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] fil
         streams.push(log.samples);
     }
     let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
-    let model = Model::train(&refs, &cfg, 42).map_err(err)?;
+    let model = crate::calibrate::train_model(&refs, &cfg, 42).map_err(err)?;
     serde_wasm_bindgen::to_value(&model).map_err(err)
 }
 
