@@ -306,10 +306,17 @@ struct AxisState {
 /// meanwhile teach it nothing (issue 14, mechanism 4).
 const PRIOR_EPOCHS: f64 = 4.0;
 
+/// The weight of the next sample in a learnt mean square that has learnt
+/// from `learnt` samples: a running mean over the prior (`PRIOR_EPOCHS`)
+/// and the samples until it reaches the forgetting factor `alpha`.
+fn fast_start_weight(alpha: f64, learnt: u32) -> f64 {
+    alpha.max(1.0 / (f64::from(learnt) + PRIOR_EPOCHS))
+}
+
 impl AxisState {
     /// The weight of the next Δr² in the σ_Δ estimate.
     fn learn_weight(&self, alpha: f64) -> f64 {
-        alpha.max(1.0 / (f64::from(self.learnt) + PRIOR_EPOCHS))
+        fast_start_weight(alpha, self.learnt)
     }
 
     /// Still learning its first `1/alpha` epochs.
@@ -404,6 +411,10 @@ struct PvTest {
     inc_cap: usize,
     /// Statistic of the current epoch, NaN when not observed this epoch.
     stat: f64,
+    /// Epochs `ms_u` and `ms` learnt from (saturating): both start fast,
+    /// as σ_Δ does (`PRIOR_EPOCHS`).
+    learnt_u: u32,
+    learnt_s: u32,
 }
 
 /// Initial and floor σ of the window sum `S`, m.
@@ -437,6 +448,8 @@ impl PvTest {
             inc_head: 0,
             inc_cap: cap.div_ceil(4 * PV_WINDOW_FACTOR).clamp(1, 4),
             stat: f64::NAN,
+            learnt_u: 0,
+            learnt_s: 0,
         }
     }
     fn clear(&mut self) {
@@ -519,19 +532,25 @@ impl PvTest {
         if self.len == 0 {
             return;
         }
+        let w_u = fast_start_weight(PV_ALPHA_U, self.learnt_u);
+        self.learnt_u = self.learnt_u.saturating_add(1);
         for a in 0..3 {
             let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
             let x = (self.last_u[a] * self.last_u[a]).min(lim * lim);
-            self.ms_u[a] += PV_ALPHA_U * (x - self.ms_u[a]);
+            self.ms_u[a] += w_u * (x - self.ms_u[a]);
         }
         if self.len < self.ring.len() {
             return;
         }
+        // The window sum's fast start stops at `PV_ALPHA_U`'s horizon: past
+        // it, a slowly growing fault must not be learnt as noise.
+        let w_s = if fast_start_weight(PV_ALPHA_U, self.learnt_s) > PV_ALPHA_U { fast_start_weight(PV_ALPHA, self.learnt_s) } else { PV_ALPHA };
+        self.learnt_s = self.learnt_s.saturating_add(1);
         for a in 0..3 {
             let sg = self.sigma(a);
             // Winsorised at 3σ.
             let x = (self.sum[a] * self.sum[a]).min(9.0 * sg * sg);
-            self.ms[a] += PV_ALPHA * (x - self.ms[a]);
+            self.ms[a] += w_s * (x - self.ms[a]);
         }
     }
 }
