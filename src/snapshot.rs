@@ -22,7 +22,8 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// then refused with a message naming both versions. 3: the detector's
 /// fields grouped into per-stage sub-states (postcard writes fields in
 /// declaration order, so the byte layout moved). 4: each indicator axis
-/// counts the epochs its σ_Δ learnt from (fast start).
+/// counts the epochs its σ_Δ learnt from, and the position–velocity test
+/// its two scales (fast start).
 pub const VERSION: u32 = 4;
 
 #[derive(Serialize, Deserialize)]
