@@ -19,7 +19,7 @@ import { CliError, AtomicOutput, openInput, readSmall, walkLogs, writeAtomic } f
 import { parseArgs, suggest } from '../lib/args.mjs';
 
 const require = createRequire(import.meta.url);
-const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
+const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'node.cjs'));
 
 const USAGE = `usage:
   navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]

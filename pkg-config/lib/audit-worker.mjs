@@ -10,7 +10,7 @@ import { fileURLToPath } from 'node:url';
 import { streamAudit } from './stream-audit.mjs';
 
 const require = createRequire(import.meta.url);
-const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
+const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'node.cjs'));
 
 parentPort.on('message', ({ file, config }) => {
   const t0 = performance.now();
