@@ -277,6 +277,7 @@ export const snapshotInfo = coreFn(core.snapshotInfo);
 export const columnNames = coreFn(core.columnNames);
 export const version = coreFn(core.version);
 export const wasmMemoryBytes = coreFn(core.wasmMemoryBytes);
+export const scenarioNames = coreFn(core.scenarioNames);
 
 // ---- the lab module ----------------------------------------------------
 
@@ -303,7 +304,6 @@ guardClass(CompareRun, lab.CompareRun, 'CompareRun');
 
 export const simulate = labFn(lab.simulate);
 export const simulateScenario = labFn(lab.simulateScenario);
-export const scenarioNames = labFn(lab.scenarioNames);
 export const trainFromCsv = labFn(lab.trainFromCsv);
 export const tightSimulate = labFn(lab.tightSimulate);
 export const tightGanTrain = labFn(lab.tightGanTrain);

@@ -441,6 +441,13 @@ pub fn column_names() -> Array {
     COLUMNS.iter().map(|c| JsValue::from_str(c)).collect()
 }
 
+/// Names of the built-in scenarios (in the core module: a page lists them
+/// before it needs the lab module that simulates them).
+#[wasm_bindgen(js_name = scenarioNames, unchecked_return_type = "string[]")]
+pub fn scenario_names() -> Array {
+    crate::sim::preset_names().into_iter().map(JsValue::from_str).collect()
+}
+
 /// Crate version.
 #[wasm_bindgen]
 pub fn version() -> String {

@@ -1,7 +1,6 @@
 //! The lab module: simulators, the method comparison and model training.
 //! Loaded by the package only when one of these is first used.
 
-use js_sys::Array;
 use wasm_bindgen::prelude::*;
 
 use super::interop::{self as js_in, config_from, err, options, plain_of, to_js, MAX_BYTES, MAX_NAME};
@@ -37,11 +36,6 @@ pub fn simulate_scenario(#[wasm_bindgen(unchecked_param_type = "object")] scenar
     Ok(sim::to_csv(&sc, &rows))
 }
 
-/// Names of the built-in scenarios.
-#[wasm_bindgen(js_name = scenarioNames, unchecked_return_type = "string[]")]
-pub fn scenario_names() -> Array {
-    sim::preset_names().into_iter().map(JsValue::from_str).collect()
-}
 
 fn js_clock() -> f64 {
     js_sys::Date::now() / 1000.0

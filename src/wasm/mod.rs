@@ -24,8 +24,8 @@ pub mod tight;
 #[cfg(feature = "wasm-core")]
 pub use audit::{audit_bytes, metrics, read_log, Auditor, StreamAuditor};
 #[cfg(feature = "wasm-core")]
-pub use detector::{column_names, snapshot_info, version, Detector, MAX_BATCH_ROWS};
+pub use detector::{column_names, scenario_names, snapshot_info, version, Detector, MAX_BATCH_ROWS};
 #[cfg(feature = "wasm-lab")]
-pub use lab::{scenario_names, simulate, simulate_scenario, train_from_csv, CompareRun};
+pub use lab::{simulate, simulate_scenario, train_from_csv, CompareRun};
 #[cfg(feature = "wasm-lab")]
 pub use tight::{tight_gan_train, tight_simulate, TightDetectorJs};
