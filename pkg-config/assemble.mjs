@@ -48,6 +48,7 @@ for (const m of MODULES) {
 
 for (const f of ['api.js', 'loader.js', 'node.js', 'navguard.js', 'README.md']) copyFileSync(join(here, f), join(pkg, f));
 for (const f of ['LICENSE-MIT', 'LICENSE-APACHE']) copyFileSync(join(root, f), join(pkg, f));
+copyFileSync(join(root, 'www', 'screenshot.png'), join(pkg, 'screenshot.png'));
 for (const dir of ['bin', 'lib']) {
   mkdirSync(join(pkg, dir), { recursive: true });
   for (const f of readdirSync(join(here, dir))) copyFileSync(join(here, dir, f), join(pkg, dir, f));
