@@ -94,7 +94,7 @@ impl Auditor {
     }
 
     /// Process up to `rows` more rows; returns the fraction done.
-    pub fn step(&mut self, #[wasm_bindgen(unchecked_param_type = "number")] rows: &JsValue) -> Result<f64, JsError> {
+    pub fn step(&mut self, #[wasm_bindgen(unchecked_param_type = "number | undefined")] rows: &JsValue) -> Result<f64, JsError> {
         let rows = match js_in::given(rows) {
             None => 1.0,
             Some(rows) => js_in::num(rows, "Auditor.step: rows").map_err(err)?,

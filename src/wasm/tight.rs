@@ -20,7 +20,7 @@ export interface TightOutput {
   positionNed: [number, number, number]; velocityNed: [number, number, number]; clockBiasM: number;
 }
 /** Tightly coupled detector configuration (see docs/tight.md); every field optional. */
-export type TightConfig = Record<string, unknown>;
+export interface TightConfig { strategy?: string; [field: string]: unknown }
 export interface TightSimulation { csv: string; config: TightConfig; faultyPrn: number; faultStart: number; faultEnd: number }
 /** Options of `tightGanTrain` (all optional): fault-free training and calibration flights, GAN size. */
 export interface GanTrainOptions { trainSeeds?: number[]; calibSeeds?: number[]; epochs?: number; hidden?: number; window?: number; alpha?: number }
@@ -120,7 +120,7 @@ pub struct TightDetectorJs {
 impl TightDetectorJs {
     /// `new TightDetector(config)`: every field optional (see `docs/tight.md`).
     #[wasm_bindgen(constructor)]
-    pub fn new(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue) -> Result<TightDetectorJs, JsError> {
+    pub fn new(#[wasm_bindgen(unchecked_param_type = "TightConfig | undefined")] config: JsValue) -> Result<TightDetectorJs, JsError> {
         let cfg = tight_config(&config)?;
         Ok(TightDetectorJs { inner: crate::tight::stream::TightDetector::new(cfg).map_err(err)? })
     }
@@ -136,7 +136,7 @@ impl TightDetectorJs {
     /// GAN-FDSR with a model from `tightGanTrain` (its `model` bytes) instead
     /// of the embedded one; `config` as for the constructor.
     #[wasm_bindgen(js_name = withGanModel)]
-    pub fn with_gan_model(#[wasm_bindgen(unchecked_param_type = "object | undefined")] config: JsValue, #[wasm_bindgen(unchecked_param_type = "Uint8Array")] model: &JsValue) -> Result<TightDetectorJs, JsError> {
+    pub fn with_gan_model(#[wasm_bindgen(unchecked_param_type = "TightConfig | undefined")] config: JsValue, #[wasm_bindgen(unchecked_param_type = "Uint8Array")] model: &JsValue) -> Result<TightDetectorJs, JsError> {
         let model = js_in::bytes(model, MAX_BYTES, "withGanModel: model").map_err(err)?;
         let cfg = tight_config(&config)?;
         let model = crate::tight::gan_fdsr::GanDetectorModel::from_bytes(&model).map_err(err)?;
@@ -211,7 +211,7 @@ pub fn tight_simulate(
 #[wasm_bindgen(js_name = tightGanTrain, unchecked_return_type = "GanTrainResult")]
 pub fn tight_gan_train(
     #[wasm_bindgen(unchecked_param_type = "GanTrainOptions | undefined")] options: JsValue,
-    #[wasm_bindgen(unchecked_param_type = "((p: GanTrainProgress) => boolean | void) | undefined")] on_progress: JsValue,
+    #[wasm_bindgen(js_name = onProgress, unchecked_param_type = "((p: GanTrainProgress) => boolean | void) | undefined")] on_progress: JsValue,
 ) -> Result<JsValue, JsError> {
     use crate::tight::gan_fdsr::{train_detector, GanTrainOptions};
     use crate::tight::scenario::{environments, SimConfig, World};
