@@ -1,7 +1,7 @@
 //! Run a detector over the randomised battery (src/battery.rs) and print the
 //! issue 14 acceptance figures, per-condition tables and specific checks.
 //!
-//! `cargo run --release --example battery -- [--split eval|tune] [--flights N]
+//! `cargo run --release -p navguard-examples --example battery -- [--split eval|tune] [--flights N]
 //!  [--start I] [--method M] [--config CFG.json] [--checks N] [--imu-flights N]
 //!  [--threads T] [--json] [--verbose] [--write DIR]`
 //!

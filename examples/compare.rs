@@ -1,5 +1,5 @@
 //! Native run of the method comparison (the CLI's `navguard compare` runs the
-//! same core in wasm): `cargo run --release --example compare -- [SEEDS] [LOG...]`.
+//! same core in wasm): `cargo run --release -p navguard-examples --example compare -- [SEEDS] [LOG...]`.
 use std::sync::OnceLock;
 use std::time::Instant;
 

@@ -1,8 +1,9 @@
 //! Table 1 of Shen et al. 2022 on the simulated satellites, for both GAN
 //! input series (the same analysis `navguard-gan train` prints):
-//! `cargo run --release --example gan_table1`.
+//! `cargo run --release -p navguard-examples --example gan_table1`.
 use navguard::tight::chaos::{analyze, table1_markdown, ChaosOptions};
-use navguard::tight::gan_fdsr::{input_series, GanInput};
+use navguard::tight::gan_fdsr::GanInput;
+use navguard::tight::gan_fdsr_train::input_series;
 use navguard::tight::scenario::{environments, SimConfig, World};
 
 fn main() -> Result<(), navguard::tight::TightError> {

@@ -1,5 +1,5 @@
 //! Wall-clock timing of the GAN detector at the default sizes
-//! (`cargo run --release --example gan_timing`). Prints, asserts nothing.
+//! (`cargo run --release -p navguard-examples --example gan_timing`). Prints, asserts nothing.
 
 use std::time::Instant;
 

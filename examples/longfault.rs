@@ -1,6 +1,6 @@
 //! Long-fault probe (issue 14 mechanisms 1 and 3): flagged share inside the
 //! fault and flagged rows after it, per kind and length.
-//! `cargo run --release --example longfault`
+//! `cargo run --release -p navguard-examples --example longfault`
 use navguard::{config::Config, detector::Detector, sim::*};
 
 fn main() {

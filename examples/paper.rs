@@ -1,6 +1,6 @@
 //! The paper scenario (degraded outages) over seeds 1–5 with the default
 //! config: metrics per seed, then the false alarms, misses and hits summed.
-//! `cargo run --release --example paper`
+//! `cargo run --release -p navguard-examples --example paper`
 use navguard::{config::Config, detector::Detector, metrics, sim::*};
 fn main() {
     let mut tot = (0, 0, 0);

@@ -1,6 +1,6 @@
 //! Real-log summary for tuning: flagged share of GPS epochs and the fault
 //! intervals (kind, driver, duration) per log under the given paths.
-//! `cargo run --release --example reallogs -- ../shared/data/*/* [-v]`
+//! `cargo run --release -p navguard-examples --example reallogs -- ../shared/data/*/* [-v]`
 use navguard::{audit::audit, config::Config, logs::read_any};
 
 fn main() {

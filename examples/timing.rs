@@ -1,5 +1,5 @@
 //! Native timing of the detector on the paper scenario (see README "Speed").
-//! `cargo run --release --example timing [reps] [noretrain]`
+//! `cargo run --release -p navguard-examples --example timing [reps] [noretrain]`
 use navguard::{config::Config, detector::Detector, sim::*};
 fn main() {
     let rows = simulate(&Scenario::paper(OutageMode::Degraded, 1)).unwrap_or_default();

@@ -1,11 +1,11 @@
 //! Fingerprints of the detector's verdicts, to prove a refactor changed none.
 //!
-//! `cargo run --release --example verdicts -- FILE...`: the native audit of
+//! `cargo run --release -p navguard-examples --example verdicts -- FILE...`: the native audit of
 //! each file: rows, flagged rows, and an FNV-1a hash over every row's status
 //! and F bits. The Node test `tests/node/determinism.test.mjs` compares it
 //! with the wasm build's.
 //!
-//! `cargo run --release --example verdicts -- --sim`: every preset scenario
+//! `cargo run --release -p navguard-examples --example verdicts -- --sim`: every preset scenario
 //! and every case of the comparison battery over seeds 1..=3, under every
 //! `config.method` (and the ANFIS with a short retraining cycle, so online
 //! learning runs often), plus a model trained on oracle runs. One line per
@@ -16,7 +16,7 @@
 use navguard::audit::audit;
 use navguard::compare::battery;
 use navguard::config::Config;
-use navguard::detector::{Detector, Model};
+use navguard::detector::Detector;
 use navguard::logs::read_any;
 use navguard::methods::Method;
 use navguard::sim::{preset_names, simulate, Scenario};
@@ -137,7 +137,7 @@ fn sim() -> Result<(), String> {
     // Oracle runs: the trainer drives the detector with decisions forced to
     // the labels.
     let refs: Vec<&[navguard::Sample]> = streams.iter().map(|r| r.as_slice()).collect();
-    let model = Model::train(&refs, &Config::default(), 7)?;
+    let model = navguard::calibrate::train_model(&refs, &Config::default(), 7)?;
     let mut h = Fnv::new();
     h.str(&format!("{:?}", model));
     println!("trained model\t{}\t{}\t{:016x}", model.d1.len(), model.d2.len(), h.0);

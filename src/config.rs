@@ -3,7 +3,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::anfis::Anfis;
 use crate::filter::FilterNoise;
 use crate::indicators::IndicatorSettings;
 use crate::methods::Method;
@@ -44,7 +43,7 @@ pub struct ConfigInput {
     /// A pause with no rows at all longer than this is a logging gap, s.
     pub data_gap: Option<f64>,
     /// A trained model (as written by `navguard-train` / `trainFromCsv`).
-    pub model: Option<crate::detector::Model>,
+    pub model: Option<crate::model::Model>,
 }
 
 /// Checked configuration.
@@ -61,7 +60,7 @@ pub struct Config {
     pub max_coast: f64,
     pub data_gap: f64,
     #[serde(skip)]
-    pub model: Option<crate::detector::Model>,
+    pub model: Option<crate::model::Model>,
 }
 
 /// Serializable mirror of the filter noise (for reports).
@@ -238,15 +237,6 @@ impl Config {
 
     pub fn indicator_settings(&self) -> IndicatorSettings {
         IndicatorSettings { window: self.window, ..IndicatorSettings::default() }
-    }
-}
-
-/// Used by [`crate::detector::Model::check`].
-pub(crate) fn check_anfis(a: &Anfis) -> Result<(), String> {
-    if a.is_finite() {
-        Ok(())
-    } else {
-        Err("ANFIS parameters must be finite with positive widths".into())
     }
 }
 

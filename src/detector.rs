@@ -54,140 +54,8 @@ use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
+pub use crate::model::{has_signature, Model};
 use crate::sample::Sample;
-
-/// A trained model: ANFIS parameters plus the initial databases D1₀, D2₀.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Model {
-    pub anfis: Anfis,
-    /// Normal samples, ANFIS input space `[ln(1+R), C]`.
-    pub d1: Vec<[f64; 2]>,
-    /// Fault samples.
-    pub d2: Vec<[f64; 2]>,
-    /// How it was made (free text).
-    #[serde(default)]
-    pub provenance: String,
-}
-
-impl Model {
-    /// The model shipped in the crate, made by `cargo run --release --bin navguard-train`.
-    /// Parsed once per process (a few hundred µs), then cloned.
-    pub fn embedded() -> Result<Model, String> {
-        static EMBEDDED: std::sync::OnceLock<Result<Model, String>> = std::sync::OnceLock::new();
-        EMBEDDED
-            .get_or_init(|| {
-                serde_json::from_str(include_str!("default_model.json")).map_err(|e| format!("embedded model: {e}"))
-            })
-            .clone()
-    }
-
-    /// Train a model from labelled streams: run the detector with decisions
-    /// forced to the labels (so the filter gates as it would on a correct
-    /// verdict), collect `(R, C)` at labelled GPS epochs, clean, subsample
-    /// `q` per class with a seeded RNG, and fit the ANFIS by hybrid learning.
-    ///
-    /// Cleaning: fault epochs whose indicators never left the clean region
-    /// (`R < 3` and `C < 0.7`, e.g. the first seconds of a slow ramp) are
-    /// dropped from D2: they carry no fault signature and would only teach the
-    /// model to alarm on clean data.
-    pub fn train(streams: &[&[Sample]], cfg: &Config, seed: u64) -> Result<Model, String> {
-        let mut normal = vec![];
-        let mut fault = vec![];
-        let base = Model::untrained();
-        for rows in streams {
-            let mut det = Detector::with_model(cfg.clone(), &base);
-            det.set_oracle(true);
-            for (i, s) in rows.iter().enumerate() {
-                let o = det.push(s).map_err(|e| format!("training stream, {e} (index {i})"))?;
-                if !o.gps_epoch || s.label.is_nan() || o.kind == kind::NO_GPS {
-                    continue;
-                }
-                let x = inputs(o.r, o.c);
-                if s.label >= 0.5 {
-                    if has_signature(o.r, o.c) {
-                        fault.push(x);
-                    }
-                } else {
-                    normal.push(x);
-                }
-            }
-        }
-        if normal.len() < 10 || fault.len() < 10 {
-            return Err(format!(
-                "training needs at least 10 labelled normal and 10 fault GPS epochs with a fault signature; got {} and {}",
-                normal.len(),
-                fault.len()
-            ));
-        }
-        let mut rng = crate::sim::Rng::new(seed);
-        let pick = |v: &mut Vec<[f64; 2]>, n: usize, rng: &mut crate::sim::Rng| -> Vec<[f64; 2]> {
-            // Partial Fisher–Yates: a seeded uniform subsample.
-            let n = n.min(v.len());
-            for i in 0..n {
-                let j = i + (rng.next_u64() % (v.len() - i) as u64) as usize;
-                v.swap(i, j);
-            }
-            v[..n].to_vec()
-        };
-        let d1 = pick(&mut normal, cfg.q, &mut rng);
-        let d2 = pick(&mut fault, cfg.q, &mut rng);
-        let mut xs = d1.clone();
-        xs.extend_from_slice(&d2);
-        let ys: Vec<f64> = d1.iter().map(|_| 0.0).chain(d2.iter().map(|_| 1.0)).collect();
-        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-        for x in &xs {
-            for k in 0..2 {
-                lo[k] = lo[k].min(x[k]);
-                hi[k] = hi[k].max(x[k]);
-            }
-        }
-        let mut anfis = Anfis::init_grid(lo, hi);
-        let mse = anfis.train_hybrid(&xs, &ys, 200, 0.05);
-        Ok(Model {
-            anfis,
-            d1,
-            d2,
-            provenance: format!(
-                "navguard-train: {} streams, {} normal / {} fault epochs before subsampling, q={}, window={}, seed={}, training MSE {:.4}",
-                streams.len(),
-                normal.len(),
-                fault.len(),
-                cfg.q,
-                cfg.window,
-                seed,
-                mse
-            ),
-        })
-    }
-
-    /// Grid-initialised ANFIS with a plain R ramp, used only to drive the
-    /// trainer's oracle runs (their decisions come from the labels).
-    pub fn untrained() -> Model {
-        Model {
-            anfis: Anfis::init_grid([0.0, 0.0], [3.0, 1.0]),
-            d1: vec![],
-            d2: vec![],
-            provenance: "untrained".into(),
-        }
-    }
-
-    pub fn check(&self) -> Result<(), String> {
-        crate::config::check_anfis(&self.anfis)?;
-        if !self.d1.iter().chain(self.d2.iter()).flatten().all(|v| v.is_finite()) {
-            return Err("database entries must be finite".into());
-        }
-        Ok(())
-    }
-}
-
-/// A fault epoch carries a fault signature: its indicators left the region
-/// clean data occupies (`R ≥ 3` or `C ≥ 0.7`). Used to clean the training
-/// set and to admit online verdicts into D2.
-pub fn has_signature(r: f64, c: f64) -> bool {
-    r >= SIG_R || c >= SIG_C
-}
-const SIG_R: f64 = 3.0;
-const SIG_C: f64 = 0.7;
 
 /// What kind of verdict a row carries.
 pub mod kind {
@@ -610,9 +478,8 @@ struct Consistency {
 /// once `Σ |ΔV|²` reaches `CLOCK_MIN_SXX` (about 70 m flown), clamped to
 /// `CLOCK_RANGE`, and multiplies every time step of the filter and of the
 /// position–velocity test. A clock error always points along the velocity;
-/// a position fault does not and averages out over headings, so blocks in
-/// a position-only episode still count; blocks with the receiver's
-/// velocity withheld do not.
+/// a position fault need not, but a long ramp along a straight leg does, so
+/// blocks inside any fault episode do not count.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct ClockRate {
     /// True seconds per boot-clock second.
@@ -956,13 +823,19 @@ impl Withheld {
             for a in 0..3 {
                 ind.accept(a, prev_r[a], kf.position_var(a), fix.y[a] - p[a]);
             }
+        } else {
+            (0..3).for_each(|a| ind.learn_withheld(a, prev_r[a]));
         }
-        if let (Some(v), false) = (&fix.vel, self.gps_vel()) {
-            kf.update_velocity(v)?;
-            let vel = kf.velocity();
-            for a in 0..3 {
-                ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
+        match (&fix.vel, self.gps_vel()) {
+            (Some(v), false) => {
+                kf.update_velocity(v)?;
+                let vel = kf.velocity();
+                for a in 0..3 {
+                    ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
+                }
             }
+            (Some(_), true) => (3..6).for_each(|a| ind.learn_withheld(a, prev_r[a])),
+            (None, _) => {}
         }
         Ok(())
     }
@@ -1282,7 +1155,7 @@ impl Detector {
         if l.d0_x.len() != l.d0_y.len() {
             return Err(format!("D0: {} samples but {} labels", l.d0_x.len(), l.d0_y.len()));
         }
-        crate::config::check_anfis(&l.anfis).map_err(|e| format!("anfis: {e}"))?;
+        crate::model::check_anfis(&l.anfis).map_err(|e| format!("anfis: {e}"))?;
         for w in &self.methods.maha {
             w.check_shape()?;
         }
@@ -1349,6 +1222,18 @@ impl Detector {
     /// GPS velocity N/E/D (m/s), baro (m); NaN where that row had none.
     pub fn residuals(&self) -> [f64; 7] {
         self.resid
+    }
+
+    /// The indicator engine (learnt σ_Δ per axis and the windows), for
+    /// diagnosis.
+    pub fn indicator_engine(&self) -> &IndicatorEngine {
+        &self.ind
+    }
+
+    /// The learnt boot-clock rate: true seconds per log second (1 until
+    /// learnt, or within 1% of 1).
+    pub fn clock_rate(&self) -> f64 {
+        self.consistency.rate.scale
     }
 
     /// Latest indicators (per-group detail included).
@@ -1551,6 +1436,9 @@ impl Detector {
         let res = self.last_est.residuals(kf, &mut self.ind, &fix);
         res.write(&mut self.resid);
         let vel_withheld = self.episode.withheld.gps_vel();
+        // Not inside any episode: a 60 s position ramp along a straight leg
+        // does not average out over headings and taught the clock a wrong
+        // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate);
         self.last_ind = ind;
@@ -2042,7 +1930,7 @@ mod tests {
         // 100 Hz and 0.0025 at 400 Hz.
         for (rate, want) in [(100.0, 0.01), (400.0, 0.0025)] {
             let mut n = ImuNoise::default();
-            let mut rng = crate::sim::Rng::new(7);
+            let mut rng = crate::rng::Rng::new(7);
             let mut psd = 0.0;
             for k in 0..(rate as usize * 60) {
                 let f = [rng.normal(), rng.normal(), rng.normal() - 9.81];

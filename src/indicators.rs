@@ -294,6 +294,40 @@ struct AxisState {
     last_r: f64,
     has_prev: bool,
     has_ref: bool,
+    /// Epochs σ_Δ has learnt from (saturating).
+    learnt: u32,
+}
+
+/// The σ_Δ prior (`IndicatorSettings::initial`) counts as this many epochs:
+/// σ_Δ starts as a running mean of Δr² over the prior and the first epochs
+/// ("fast start"), and forgets at `alpha` once `1/alpha` epochs are in.
+/// Why: a fixed forgetting factor from a fixed prior takes ~150 epochs to
+/// reach a receiver 5× noisier than the prior, and the epochs it flags
+/// meanwhile teach it nothing (issue 14, mechanism 4).
+const PRIOR_EPOCHS: f64 = 4.0;
+
+impl AxisState {
+    /// The weight of the next Δr² in the σ_Δ estimate.
+    fn learn_weight(&self, alpha: f64) -> f64 {
+        alpha.max(1.0 / (f64::from(self.learnt) + PRIOR_EPOCHS))
+    }
+
+    /// Still learning its first `1/alpha` epochs.
+    fn warming(&self, alpha: f64) -> bool {
+        f64::from(self.learnt) * alpha < 1.0
+    }
+
+    /// Learn σ_Δ² from one consecutive difference `e` (m or m/s),
+    /// winsorised at 4σ (`sigma`: the σ_Δ in use) so one outlier that
+    /// slipped through cannot inflate it.
+    fn learn(&mut self, e: f64, sigma: f64, alpha: f64) {
+        if !e.is_finite() {
+            return;
+        }
+        let lim = 16.0 * sigma * sigma;
+        self.ms += self.learn_weight(alpha) * ((e * e).min(lim) - self.ms);
+        self.learnt = self.learnt.saturating_add(1);
+    }
 }
 
 /// Settings for the indicator computation.
@@ -735,6 +769,7 @@ impl IndicatorEngine {
                 last_r: 0.0,
                 has_prev: false,
                 has_ref: false,
+                learnt: 0,
             }
         };
         IndicatorEngine {
@@ -853,17 +888,28 @@ impl IndicatorEngine {
         let Some(a) = self.axes.get_mut(axis) else {
             return;
         };
-        let e = a.last_r - prev_r;
-        if e.is_finite() {
-            // Winsorise at 4σ so one outlier that slipped through cannot inflate σ_Δ.
-            let lim = 16.0 * sigma * sigma;
-            a.ms += alpha * ((e * e).min(lim) - a.ms);
-        }
+        a.learn(a.last_r - prev_r, sigma, alpha);
         let r_post = if r_post.is_finite() { r_post } else { a.last_r };
         a.r_ref = r_post;
         a.prev = r_post;
         a.p_ref = p_post;
         a.p_peak = p_post;
+    }
+
+    /// The detector withheld this axis' measurement (a fault verdict): while
+    /// σ_Δ is still warming up, learn from its consecutive difference all
+    /// the same, winsorised, without moving the reference. A prior far below
+    /// the receiver's noise flags the first epochs; learning only from
+    /// accepted ones would keep it there. A step adds one winsorised
+    /// difference, a ramp or a frozen fix next to nothing.
+    pub fn learn_withheld(&mut self, axis: usize, prev_r: f64) {
+        let alpha = self.set.alpha;
+        let sigma = self.sigma(axis);
+        if let Some(a) = self.axes.get_mut(axis) {
+            if a.warming(alpha) {
+                a.learn(a.last_r - prev_r, sigma, alpha);
+            }
+        }
     }
 
     /// Feed the position–velocity mismatch `u` of this GPS epoch (per NED

@@ -7,6 +7,7 @@
 pub mod anfis;
 pub mod audit;
 pub mod battery;
+pub mod calibrate;
 pub mod compare;
 pub mod config;
 pub mod detector;
@@ -16,10 +17,11 @@ pub mod indicators;
 pub mod logs;
 pub mod methods;
 pub mod metrics;
+pub mod model;
+pub mod rng;
 pub mod sample;
 pub mod sim;
 pub mod thresholds;
-pub mod ugv;
 pub mod tight;
 pub mod snapshot;
 
@@ -27,5 +29,6 @@ pub mod snapshot;
 pub mod wasm;
 
 pub use config::{Config, ConfigInput};
-pub use detector::{Detector, InputError, Model, Output};
+pub use detector::{Detector, InputError, Output};
+pub use model::Model;
 pub use sample::Sample;

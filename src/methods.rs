@@ -28,7 +28,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::thresholds::{AdaptiveConfig, Evaluator, Method as ThMethod, SpeedBands, ThresholdPool, Verdict};
+use crate::thresholds::{Evaluator, SpeedBands, Verdict};
 
 /// Detection method (`config.method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -341,9 +341,18 @@ impl PoolState {
     }
 }
 
-/// The pool for `method` (rms, knee or adaptive), fitted once per process on
-/// clean simulated flights and cached: reproducible from the code, never a
-/// stored constant. Speed bands split the training epochs into quartiles.
+/// The pools of `rms`, `knee` and `adaptive` (in that order), as shipped in
+/// `src/default_pools.bin` (postcard, so every f64 is bit-exact). They were
+/// fitted on clean simulated flights by [`crate::calibrate::fit_pools`] over
+/// seeds [`POOL_SEEDS`]; a test refits them and compares the bytes.
+pub const EMBEDDED_POOLS: &[u8] = include_bytes!("default_pools.bin");
+
+/// The simulator seeds the embedded pools were fitted on.
+pub const POOL_SEEDS: core::ops::Range<u64> = 1000..1006;
+
+/// The pool for `method` (rms, knee or adaptive): the embedded pools, decoded
+/// once per process and cloned. Speed bands split the training epochs into
+/// quartiles.
 pub fn default_pool(method: Method) -> Result<PoolState, String> {
     use std::sync::OnceLock;
     static POOLS: OnceLock<Result<[PoolState; 3], String>> = OnceLock::new();
@@ -353,70 +362,11 @@ pub fn default_pool(method: Method) -> Result<PoolState, String> {
         Method::Adaptive => 2,
         m => return Err(format!("method \"{}\" has no threshold pool", m.name())),
     };
-    let pools = POOLS.get_or_init(|| fit_pools(1000..1006)).as_ref().map_err(|e| e.clone())?;
+    let pools = POOLS
+        .get_or_init(|| postcard::from_bytes(EMBEDDED_POOLS).map_err(|e| format!("embedded threshold pools: {e}")))
+        .as_ref()
+        .map_err(|e| e.clone())?;
     Ok(pools[k].clone())
-}
-
-/// Run `method` over clean simulated flights (aggressive, survey and paper
-/// trajectories, 300 s, seeds `seeds`) with verdicts forced normal, calling
-/// `each(detector, score)` at every GPS epoch with a positive score.
-fn clean_epochs(seeds: core::ops::Range<u64>, method: Method, mut each: impl FnMut(&crate::Detector, f64)) -> Result<(), String> {
-    use crate::sim::{simulate, Scenario, Trajectory};
-    for seed in seeds {
-        for tr in [Trajectory::Aggressive, Trajectory::Survey, Trajectory::Paper] {
-            let rows = simulate(&Scenario::clean(tr, seed, 300.0))?;
-            let mut det = crate::Detector::new(crate::Config { method, ..crate::Config::default() })?;
-            det.set_oracle(true);
-            for s in &rows {
-                let o = det.push(s).map_err(|e| e.to_string())?;
-                if o.gps_epoch && o.f > 0.0 {
-                    each(&det, o.f);
-                }
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Collect (speed, largest γ) at every GPS epoch of clean flights, with the
-/// verdicts forced normal, and fit RT, KT and AT pools over speed quartiles.
-pub fn fit_pools(seeds: core::ops::Range<u64>) -> Result<[PoolState; 3], String> {
-    let mut data: Vec<(f64, f64)> = vec![];
-    clean_epochs(seeds, Method::Chi2, |det, f| {
-        let v = det.velocity().unwrap_or_else(Vector3::zeros);
-        data.push((v[0].hypot(v[1]), f * N_ALPHA_HALF));
-    })?;
-    let mut speeds: Vec<f64> = data.iter().map(|d| d.0).collect();
-    speeds.sort_by(f64::total_cmp);
-    let q = |p: f64| speeds[((speeds.len() as f64 * p) as usize).min(speeds.len().saturating_sub(1))];
-    let mut edges = vec![q(0.25), q(0.5), q(0.75)];
-    edges.dedup_by(|a, b| *a <= *b + 1e-6);
-    let bands = SpeedBands::new(edges)?;
-    let mut per: Vec<Vec<f64>> = vec![vec![]; bands.modes()];
-    for (v, g) in &data {
-        per[bands.mode_of(*v)?].push(*g);
-    }
-    let per_ref: Vec<&[f64]> = per.iter().map(|v| v.as_slice()).collect();
-    let cfg = AdaptiveConfig::default();
-    let fit = |m: ThMethod| -> Result<PoolState, String> {
-        let pool = ThresholdPool::fit(m, &per_ref, &cfg)?;
-        Ok(PoolState { bands: bands.clone(), eval: Evaluator::new(pool)? })
-    };
-    Ok([fit(ThMethod::Rt)?, fit(ThMethod::Kt)?, fit(ThMethod::At)?])
-}
-
-/// How [`MAHA_D2`] was set: the 99.9th percentile of the Mahalanobis d²
-/// (per group, the larger) over every GPS epoch of clean simulated flights
-/// (aggressive, survey and paper trajectories, seeds `seeds`), with the
-/// verdicts forced to "normal" so every epoch enters the reference window.
-pub fn calibrate_mahalanobis(seeds: core::ops::Range<u64>) -> Result<f64, String> {
-    let mut d2 = vec![];
-    clean_epochs(seeds, Method::Mahalanobis, |_, f| d2.push(f * MAHA_D2))?;
-    if d2.is_empty() {
-        return Err("calibrate_mahalanobis: no epochs".into());
-    }
-    d2.sort_by(f64::total_cmp);
-    Ok(d2[((d2.len() as f64 * 0.999) as usize).min(d2.len() - 1)])
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]
@@ -524,13 +474,6 @@ mod tests {
         let want = v.dot(&(c.try_inverse().unwrap() * v));
         assert_relative_eq!(w.d2(q), want, max_relative = 1e-9);
         assert_eq!(w.len(), MAHA_WINDOW);
-    }
-
-    #[test]
-    fn mahalanobis_threshold_is_reproducible() {
-        let q = calibrate_mahalanobis(1000..1004).unwrap();
-        println!("calibrated d² threshold {q:.2} (shipped {MAHA_D2})");
-        assert!((q - MAHA_D2).abs() <= 0.05 * MAHA_D2, "recalibrated {q:.2}, shipped {MAHA_D2}");
     }
 
     #[test]

@@ -1082,7 +1082,7 @@ mod tests {
     }
 
     fn noisy(n: usize, seed: u64) -> Vec<f64> {
-        let mut rng = crate::sim::Rng::new(seed);
+        let mut rng = crate::rng::Rng::new(seed);
         (0..n).map(|_| 0.08 * rng.normal()).collect()
     }
 

@@ -6,7 +6,6 @@
 //! trains from your own labelled navlog CSV(s) (`label` column, 0/1).
 
 use navguard::config::Config;
-use navguard::detector::Model;
 use navguard::logs::csv::read_csv;
 use navguard::sim::{self, FaultKind, OutageMode, Scenario, Trajectory};
 use navguard::Sample;
@@ -118,7 +117,7 @@ fn main() {
             .collect()
     };
     let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
-    let model = Model::train(&refs, &cfg, 42).unwrap_or_else(|e| {
+    let model = navguard::calibrate::train_model(&refs, &cfg, 42).unwrap_or_else(|e| {
         eprintln!("navguard-train: {e}");
         std::process::exit(2)
     });

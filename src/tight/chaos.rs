@@ -854,7 +854,7 @@ pub fn table1_markdown(rows: &[(String, ChaosIndices)]) -> String {
 #[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
-    use crate::sim::Rng;
+    use crate::rng::Rng;
     use approx::assert_relative_eq;
 
     fn henon(n: usize) -> Vec<f64> {

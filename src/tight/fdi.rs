@@ -10,49 +10,11 @@ use std::collections::BTreeMap;
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
 
-use super::gan_fdsr::{default_model, GanDetectorModel, GanMonitor};
+use super::gan_fdsr::{GanDetectorModel, GanMonitor};
+pub use super::predict::{FilterPredictor, RangePredictor, Reconstruction};
+pub use super::stats::{chi2_quantile, normal_upper_quantile, threshold_t1};
 use super::tc_ekf::{Linearized, Mat17, PrMeas, TcEkf, N, POS};
 use super::TightError;
-
-/// Upper-tail standard normal quantile: `x` with `P(Z > x) = p`, `0 < p < 1`.
-/// Bisection on `erfc` (libm), so identical on every target.
-pub fn normal_upper_quantile(p: f64) -> Result<f64, TightError> {
-    if !(p > 0.0 && p < 1.0) {
-        return Err(TightError::new("p", format!("must be in (0, 1), got {p}")));
-    }
-    let q = |x: f64| 0.5 * libm::erfc(x / core::f64::consts::SQRT_2);
-    let (mut lo, mut hi) = (-40.0f64, 40.0f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if q(mid) > p {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(0.5 * (lo + hi))
-}
-
-/// Detection threshold `T1 = N_{α/2}(0, 1)` for the two-sided test of eq. A3
-/// at false-alarm rate `α` (α = 0.001 gives 3.29).
-pub fn threshold_t1(alpha: f64) -> Result<f64, TightError> {
-    if !(alpha > 0.0 && alpha < 1.0) {
-        return Err(TightError::new("alpha", format!("must be in (0, 1), got {alpha}")));
-    }
-    normal_upper_quantile(alpha / 2.0)
-}
-
-/// Chi-square quantile (lower tail probability `p`, `k` degrees of freedom),
-/// Wilson–Hilferty approximation (relative error < 1 % for k ≥ 3).
-pub fn chi2_quantile(p: f64, k: f64) -> Result<f64, TightError> {
-    if !(k > 0.0 && k.is_finite()) {
-        return Err(TightError::new("k", format!("must be finite and > 0, got {k}")));
-    }
-    let z = -normal_upper_quantile(p)?;
-    let a = 2.0 / (9.0 * k);
-    let c = 1.0 - a + z * libm::sqrt(a);
-    Ok(k * c * c * c)
-}
 
 /// Normalized innovations (eq. A2): `λ_i = c_iᵀ P_v⁻¹ v / √(c_iᵀ P_v⁻¹ c_i)`.
 /// Each is N(0, 1) when fault-free. `None` if `P_v` is not positive definite.
@@ -154,74 +116,6 @@ pub fn rdpop(p_pred: &Mat17, lin: &Linearized, i: usize) -> Option<f64> {
         return None;
     }
     Some((tr(&iso) - base) / base)
-}
-
-/// Reconstructed pseudo-range.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Reconstruction {
-    /// Pseudo-range, m.
-    pub pr: f64,
-    /// Its error variance, m².
-    pub variance: f64,
-}
-
-/// Predictor of a satellite's pseudo-range, used to reconstruct a faulty
-/// measurement. The GAN generator of the next issue implements this trait.
-pub trait RangePredictor {
-    /// A measurement accepted as fault-free at time `t` (s): the measured
-    /// pseudo-range and the filter's predicted one (INS position + clock), m.
-    fn observe(&mut self, t: f64, prn: u8, measured: f64, predicted: f64);
-    /// Pseudo-range of `prn` at time `t`, given the filter's predicted
-    /// pseudo-range now; `None` when it cannot predict (then isolate).
-    fn reconstruct(&mut self, t: f64, prn: u8, predicted: f64) -> Option<Reconstruction>;
-    /// Short name for reports.
-    fn name(&self) -> &'static str;
-}
-
-/// The filter's own prediction, in the form of the paper's eq. 12 with a zero
-/// generated increment difference: `ρ̂_G(k) = ρ_G(k0) + [ρ_I(k) − ρ_I(k0)]`,
-/// i.e. the filter-predicted pseudo-range now plus the (smoothed) offset
-/// between measurement and prediction while the satellite was healthy.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FilterPredictor {
-    /// Weight of the newest offset in its exponential average (0, 1].
-    pub smoothing: f64,
-    /// Variance at age 0, m².
-    pub base_variance: f64,
-    /// Growth of the standard deviation with the age of the last healthy
-    /// measurement, m/s (an unmodelled increment difference).
-    pub sigma_rate: f64,
-    /// Refuse to predict from history older than this, s.
-    pub max_age: f64,
-    /// prn -> (time of last healthy measurement, smoothed offset m).
-    history: BTreeMap<u8, (f64, f64)>,
-}
-
-impl FilterPredictor {
-    pub fn new(base_variance: f64) -> Self {
-        FilterPredictor { smoothing: 0.2, base_variance, sigma_rate: 0.5, max_age: 120.0, history: BTreeMap::new() }
-    }
-}
-
-impl RangePredictor for FilterPredictor {
-    fn observe(&mut self, t: f64, prn: u8, measured: f64, predicted: f64) {
-        let off = measured - predicted;
-        let a = self.smoothing;
-        let e = self.history.entry(prn).or_insert((t, off));
-        *e = (t, (1.0 - a) * e.1 + a * off);
-    }
-    fn reconstruct(&mut self, t: f64, prn: u8, predicted: f64) -> Option<Reconstruction> {
-        let &(t0, off) = self.history.get(&prn)?;
-        let age = t - t0;
-        if !(age >= 0.0 && age <= self.max_age) {
-            return None;
-        }
-        let s = self.sigma_rate * age;
-        Some(Reconstruction { pr: predicted + off, variance: self.base_variance + s * s })
-    }
-    fn name(&self) -> &'static str {
-        "filter-prediction"
-    }
 }
 
 /// How a detected fault is handled.
@@ -336,23 +230,24 @@ pub struct Reconfigurator {
 }
 
 impl Reconfigurator {
-    pub fn new(cfg: FdsrConfig, predictor: Box<dyn RangePredictor>) -> Result<Self, TightError> {
+    /// A reconfigurator for `cfg.strategy`. [`Strategy::Gan`] needs its
+    /// model in `gan` (the caller picks it: the embedded default or one
+    /// trained on the user's data); other strategies ignore `gan`.
+    pub fn new(cfg: FdsrConfig, predictor: Box<dyn RangePredictor>, gan: Option<GanDetectorModel>) -> Result<Self, TightError> {
         let t1 = cfg.check()?;
-        let gan = match cfg.strategy {
-            Strategy::Gan => Some(Box::new(GanMonitor::new(default_model()?))),
+        let gan = match (cfg.strategy, gan) {
+            (Strategy::Gan, Some(m)) => Some(Box::new(GanMonitor::new(m))),
+            (Strategy::Gan, None) => return Err(TightError::new("strategy", "GAN-FDSR needs a GAN model")),
             _ => None,
         };
         Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new(), gan })
     }
 
     /// [`Strategy::Gan`] with a given model (e.g. one trained on the user's
-    /// data) in place of the embedded default.
+    /// data), whatever `cfg.strategy` says.
     pub fn with_gan(cfg: FdsrConfig, model: GanDetectorModel) -> Result<Self, TightError> {
-        let t1 = cfg.check()?;
-        let cfg = FdsrConfig { strategy: Strategy::Gan, ..cfg };
         // The GAN path rebuilds from its generator; this predictor is unused.
-        let predictor = Box::new(FilterPredictor::new(1.0));
-        Ok(Reconfigurator { cfg, t1, predictor, under_repair: BTreeMap::new(), gan: Some(Box::new(GanMonitor::new(model))) })
+        Self::new(FdsrConfig { strategy: Strategy::Gan, ..cfg }, Box::new(FilterPredictor::new(1.0)), Some(model))
     }
 
     /// One GNSS epoch at time `t` (s): test, reconfigure, update the filter.
@@ -721,7 +616,8 @@ mod tests {
         faulty[2].pr += 60.0; // PRN 3
         let run = |strategy: Strategy, eta: f64| {
             let mut ekf = ekf0.clone();
-            let mut r = Reconfigurator::new(FdsrConfig { strategy, alpha: 0.001, eta }, Box::new(FilterPredictor::new(9.0))).unwrap();
+            let gan = (strategy == Strategy::Gan).then(|| crate::tight::gan_fdsr::default_model().unwrap());
+            let mut r = Reconfigurator::new(FdsrConfig { strategy, alpha: 0.001, eta }, Box::new(FilterPredictor::new(9.0)), gan).unwrap();
             let d0 = r.epoch(&mut ekf, &clean, 0.0);
             assert_eq!(d0.detection, None);
             assert_eq!(d0.action, Action::UpdateAll);

@@ -17,11 +17,21 @@
 //!   Rosenstein largest Lyapunov exponent.
 //! * [`gan`]: the GRU GAN detector of §3.1–3.2 (training, latent search,
 //!   `Score(y)`, threshold `T2`), hand-written over `f64`.
-//! * [`gan_fdsr`]: GAN-FDSR per satellite: ρD windows scored against T2,
-//!   the flagged satellite rebuilt from the generator (eq. 12); the model
-//!   training pipeline and the embedded default model.
+//! * [`gan_fdsr`]: the runtime GAN-FDSR monitor per satellite: ρD windows
+//!   scored against T2, the flagged satellite rebuilt from the generator
+//!   (eq. 12); the embedded default model.
+//! * [`gan_fdsr_train`]: the model training pipeline (needs the simulator).
+//! * [`predict`]: pseudo-range reconstruction from a predictor (eq. 12).
+//! * [`stats`]: normal and chi-square quantiles.
+//! * [`rows`]: the per-epoch row types and the CSV reader and writer for the
+//!   `pr_<prn>` row format.
 //! * [`stream`]: [`stream::TightDetector`], the streaming API over raw
-//!   per-epoch rows, and the CSV reader for the `pr_<prn>` row format.
+//!   per-epoch rows.
+//!
+//! Imports run one way: `stream` → `fdi` → `gan_fdsr` → `gan` → `stats`;
+//! `scenario` (the simulator) → `fdi`, `rows`; `gan_fdsr_train` →
+//! `scenario`. The reconfigurator is handed its GAN model; only `stream` and
+//! `scenario` load the embedded default.
 //!
 //! Frames and units: the navigation frame is a local NED tangent frame fixed
 //! at the site (metres); the body frame is forward-right-down. Angles are in
@@ -33,7 +43,11 @@ pub mod constellation;
 pub mod fdi;
 pub mod gan;
 pub mod gan_fdsr;
+pub mod gan_fdsr_train;
+pub mod predict;
+pub mod rows;
 pub mod scenario;
+pub mod stats;
 pub mod stream;
 pub mod tc_ekf;
 

@@ -12,12 +12,12 @@ use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::constellation::{dop, los_vectors, Constellation, Site};
-use super::gan_fdsr::GanDetectorModel;
+use super::gan_fdsr::{default_model, GanDetectorModel};
 use super::fdi::{rdpop, Action, FdsrConfig, FilterPredictor, Reconfigurator, Strategy};
 use super::tc_ekf::{quat_exp, EkfConfig, ImuNoise, NavState, PrMeas, TcEkf, Vec17, GRAVITY, N};
-use super::stream::{EpochRow, InitialState, PrObs};
+use super::rows::{EpochRow, InitialState, PrObs};
 use super::TightError;
-use crate::sim::Rng;
+use crate::rng::Rng;
 
 /// Fault types of Table 4.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -550,7 +550,10 @@ fn run_inner(spec: &RunSpec, mut rows: Option<&mut Vec<EpochRow>>) -> Result<Run
     let mut ekf = TcEkf::new(x0, cfg.ekf)?;
     let mut fdsr = match (spec.fdsr.strategy, spec.gan) {
         (Strategy::Gan, Some(m)) => Reconfigurator::with_gan(spec.fdsr, m.clone())?,
-        _ => Reconfigurator::new(spec.fdsr, Box::new(FilterPredictor::new(cfg.ekf.sigma_pr * cfg.ekf.sigma_pr)))?,
+        (strategy, _) => {
+            let gan = if strategy == Strategy::Gan { Some(default_model()?) } else { None };
+            Reconfigurator::new(spec.fdsr, Box::new(FilterPredictor::new(cfg.ekf.sigma_pr * cfg.ekf.sigma_pr)), gan)?
+        }
     };
 
     // Per-satellite error states.
@@ -679,7 +682,7 @@ pub fn run_case(world: &World, cfg: &SimConfig, env: &Environment, kind: FaultTy
 #[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
-    use crate::tight::fdi::chi2_quantile;
+    use crate::tight::stats::chi2_quantile;
 
     #[test]
     fn fault_types_table4() {

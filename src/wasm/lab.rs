@@ -4,7 +4,6 @@
 use wasm_bindgen::prelude::*;
 
 use super::interop::{self as js_in, config_from, err, options, plain_of, to_js, MAX_BYTES, MAX_NAME};
-use crate::detector::Model;
 use crate::logs;
 use crate::sample::Sample;
 use crate::sim;
@@ -121,7 +120,7 @@ pub fn train_from_csv(#[wasm_bindgen(unchecked_param_type = "Uint8Array[]")] fil
         streams.push(log.samples);
     }
     let refs: Vec<&[Sample]> = streams.iter().map(|s| s.as_slice()).collect();
-    let model = Model::train(&refs, &cfg, 42).map_err(err)?;
+    let model = crate::calibrate::train_model(&refs, &cfg, 42).map_err(err)?;
     to_js(&model)
 }
 

@@ -213,7 +213,7 @@ pub fn tight_gan_train(
     #[wasm_bindgen(unchecked_param_type = "GanTrainOptions | undefined")] options: JsValue,
     #[wasm_bindgen(js_name = onProgress, unchecked_param_type = "((p: GanTrainProgress) => boolean | void) | undefined")] on_progress: JsValue,
 ) -> Result<JsValue, JsError> {
-    use crate::tight::gan_fdsr::{train_detector, GanTrainOptions};
+    use crate::tight::gan_fdsr_train::{train_detector, GanTrainOptions};
     use crate::tight::scenario::{environments, SimConfig, World};
     let mut opts = GanTrainOptions::default();
     // Small by default: the page trains in seconds, not minutes.

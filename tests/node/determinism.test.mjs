@@ -36,7 +36,7 @@ test('native and wasm agree bit for bit on every shared log and the paper scenar
   const sim = join(mkdtempSync(join(tmpdir(), 'navguard-det-')), 'paper.csv');
   writeFileSync(sim, ng.simulate('paper', 1));
   files.push(sim);
-  const native = execFileSync('cargo', ['run', '-q', '--release', '--example', 'verdicts', '--', ...files], { cwd: root, encoding: 'utf8', maxBuffer: 1 << 24 });
+  const native = execFileSync('cargo', ['run', '-q', '--release', '-p', 'navguard-examples', '--example', 'verdicts', '--', ...files], { cwd: root, encoding: 'utf8', maxBuffer: 1 << 24 });
   const lines = native.trim().split('\n');
   assert.equal(lines.length, files.length);
   for (let i = 0; i < files.length; i++) {

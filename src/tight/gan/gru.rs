@@ -15,7 +15,7 @@
 //! order `z, r, h`: `W` is `3H × I`, then `U` is `3H × H`, then `b` is `3H`.
 //! One flat slice keeps Adam, serialization and shape checks trivial.
 
-use crate::sim::Rng;
+use crate::rng::Rng;
 
 /// Numerically safe logistic function.
 #[inline]

@@ -10,7 +10,7 @@
 //!   Parameters: `[GRU | w_d (H) | b_d]`.
 
 use super::gru::{dot, Gru, GruCache};
-use crate::sim::Rng;
+use crate::rng::Rng;
 
 /// Generator shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

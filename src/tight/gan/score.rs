@@ -7,8 +7,8 @@ use super::adam::Adam;
 use super::gru::sigmoid;
 use super::net::{DiscNet, GenNet, NetWork};
 use super::{GanConfig, GanModel};
-use crate::sim::Rng;
-use crate::tight::fdi::normal_upper_quantile;
+use crate::rng::Rng;
+use crate::tight::stats::normal_upper_quantile;
 use crate::tight::TightError;
 
 /// Detection result for one window.

@@ -5,7 +5,7 @@ use super::net::{DiscNet, GenNet, NetWork};
 use super::score::correlation;
 use super::train::softplus;
 use super::*;
-use crate::sim::Rng;
+use crate::rng::Rng;
 
 fn randv(n: usize, rng: &mut Rng) -> Vec<f64> {
     (0..n).map(|_| rng.normal()).collect()

@@ -5,7 +5,7 @@ use super::gru::sigmoid;
 use super::net::NetWork;
 use super::score::{check_vec, normalised_std};
 use super::{GanConfig, GanModel, TrainProgress};
-use crate::sim::Rng;
+use crate::rng::Rng;
 use crate::tight::TightError;
 
 /// `log(1 + eˣ)` without overflow.

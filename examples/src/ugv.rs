@@ -54,15 +54,15 @@
 //! backdated anomalies of the confirming window). `FNR = FN/(TP+FN)`. The
 //! paper's "FPR" falls as TPs grow with duration at a constant FP count
 //! (§4.3, KT at 1.3 m/s), so it is `FP/(TP+FP)` = 1 − precision, the same
-//! false-alarm rate [`crate::metrics`] uses; we report it as `fpr` and the
+//! false-alarm rate [`navguard::metrics`] uses; we report it as `fpr` and the
 //! conventional `FP/(FP+TN)` as `fpr_conventional`. Table 2 cells are the
 //! mean over the 3 intensities × 4 durations of rates pooled over the
 //! repetitions.
 
 use serde::{Deserialize, Serialize};
 
-use crate::sim::Rng;
-use crate::thresholds::{AdaptiveConfig, Evaluator, Method, ModeThreshold, ThresholdPool, Verdict};
+use navguard::rng::Rng;
+use navguard::thresholds::{AdaptiveConfig, Evaluator, Method, ModeThreshold, ThresholdPool, Verdict};
 
 /// Table A1 plus the two values the paper leaves out.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
@@ -917,7 +917,7 @@ mod tests {
         let noise = NoiseModel::for_speed(1.0).unwrap();
         let run = simulate(&p, 1.0, 4000, &noise, &[], None, 3).unwrap();
         let mean = run.residuals.iter().sum::<f64>() / 4000.0;
-        let rms = crate::thresholds::rms(&run.residuals);
+        let rms = navguard::thresholds::rms(&run.residuals);
         assert!(mean.abs() < 0.01, "mean {mean}");
         assert!((rms - 0.080349).abs() < 0.015, "rms {rms}");
         assert!(run.truth.iter().all(|t| !t));

@@ -9,7 +9,7 @@
 
 use std::sync::OnceLock;
 
-use navguard::ugv::{evaluate, EvalConfig, Report};
+use navguard_examples::ugv::{evaluate, EvalConfig, Report};
 
 fn report() -> &'static Report {
     static R: OnceLock<Report> = OnceLock::new();

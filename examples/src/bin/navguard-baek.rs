@@ -5,7 +5,7 @@
 //! `navguard-baek [--reps N] [--seed S] [--json]`: Markdown to stdout (or
 //! the full report as JSON with `--json`).
 
-use navguard::ugv::{evaluate, EvalConfig, Report};
+use navguard_examples::ugv::{evaluate, EvalConfig, Report};
 
 fn pair(p: (f64, f64)) -> String {
     format!("({:.6}, {})", p.0, fmt_sigma(p.1))
@@ -73,8 +73,8 @@ fn markdown(r: &Report) -> String {
     // Paper means over its 12 cells.
     let mut pf = [0.0; 3];
     let mut pp = [0.0; 3];
-    let n = navguard::ugv::PAPER_TABLE2.len() as f64 * 3.0;
-    for (_, rows) in navguard::ugv::PAPER_TABLE2.iter() {
+    let n = navguard_examples::ugv::PAPER_TABLE2.len() as f64 * 3.0;
+    for (_, rows) in navguard_examples::ugv::PAPER_TABLE2.iter() {
         for row in rows {
             for m in 0..3 {
                 pf[m] += row[m].0 / n;

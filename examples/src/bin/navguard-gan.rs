@@ -16,7 +16,8 @@ use std::time::Instant;
 
 use navguard::tight::chaos::table1_markdown;
 use navguard::tight::fdi::{FdsrConfig, Strategy};
-use navguard::tight::gan_fdsr::{default_model, train_detector, GanDetectorModel, GanInput, GanTrainOptions};
+use navguard::tight::gan_fdsr::{default_model, GanDetectorModel, GanInput};
+use navguard::tight::gan_fdsr_train::{train_detector, GanTrainOptions};
 use navguard::tight::scenario::{environments, run, FaultSpec, FaultType, RunRecord, RunSpec, SimConfig, World};
 
 fn main() -> ExitCode {
@@ -112,7 +113,7 @@ fn train(mut args: impl Iterator<Item = String>) -> Result<(), String> {
 
 /// The GAN trained on the paper's ρD series (`navguard-gan train --input rhod
 /// --out src/tight/gan_rhod.bin`), for the paper-faithful column of Table 5.
-const PAPER_MODEL: &[u8] = include_bytes!("../tight/gan_rhod.bin");
+const PAPER_MODEL: &[u8] = include_bytes!("../../../src/tight/gan_rhod.bin");
 
 struct Cell {
     delays: Vec<Option<f64>>,
