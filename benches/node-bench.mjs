@@ -74,7 +74,10 @@ let t = performance.now();
 const trained = ng.tightGanTrain({ epochs: trainEpochs });
 const ganTrainMs = performance.now() - t;
 
-const wasmSize = statSync(join(root, 'pkg', 'navguard_bg.wasm')).size;
+// One .wasm per module (core, lab); an older single-module build has navguard_bg.wasm.
+const wasmFiles = readdirSync(join(root, 'pkg')).filter((f) => f.endsWith('.wasm'));
+const wasmModules = Object.fromEntries(wasmFiles.map((f) => [f, statSync(join(root, 'pkg', f)).size]));
+const wasmSize = Object.values(wasmModules).reduce((a, b) => a + b, 0);
 const fmt = (x) => Math.round(x).toLocaleString('en-US');
 console.log(JSON.stringify({
   rows: n,
@@ -86,6 +89,7 @@ console.log(JSON.stringify({
   memoryBytesAfter10Batches: memStart,
   memoryBytesAtEnd: memEnd,
   wasmBytes: wasmSize,
+  wasmModules,
   readLogMBPerS: parse,
   snapshotBytes: snap.length,
   snapshotMs: +snapshotMs.toFixed(3),
@@ -96,4 +100,4 @@ console.log(JSON.stringify({
   ganTrainEpochs: trainEpochs,
   ganTrainWindows: trained.trainWindows,
 }, null, 2));
-console.error(`pushColumns ${fmt(n / (noRetrain / 1000))} rows/s, push ${fmt(n / (push / 1000))} rows/s, paper scenario ${whole.toFixed(1)} ms, .wasm ${fmt(wasmSize)} B`);
+console.error(`pushColumns ${fmt(n / (noRetrain / 1000))} rows/s, push ${fmt(n / (push / 1000))} rows/s, paper scenario ${whole.toFixed(1)} ms, .wasm ${Object.entries(wasmModules).map(([f, b]) => `${f} ${fmt(b)} B`).join(', ')}`);

@@ -244,7 +244,7 @@ fn gan_fdsr_streams_and_names_the_stepped_satellite() {
                 continue;
             }
             n += 1;
-            if let Some(p) = get(&o, "faulty_prn").as_f64() {
+            if let Some(p) = get(&o, "faultyPrn").as_f64() {
                 assert_eq!(p, prn, "another satellite named at t {t}");
                 named += 1;
                 first.get_or_insert(t - start);

@@ -311,7 +311,7 @@ function renderSummary(m) {
     ['Data gaps', r.dataGaps.length ? r.dataGaps.map((g) => `${fmt(g.start - t0Of(m), 1)}–${fmt(g.end - t0Of(m), 1)} s`).join(', ') : 'none'],
     ['Missing inputs', r.missing.length ? `<span class="warn">${r.missing.map(esc).join(', ')}</span>` : 'none'],
     ['Method', esc(methodOf(m))],
-    ['Detector', `${r.stats.retrains} retrains, ${r.stats.filter_resets} filter resets${r.stats.filter_errors ? `, <span class="warn">${r.stats.filter_errors} filter errors</span>` : ''}`],
+    ['Detector', `${r.stats.retrains} retrains, ${r.stats.filterResets} filter resets${r.stats.filterErrors ? `, <span class="warn">${r.stats.filterErrors} filter errors</span>` : ''}`],
   ];
   let html = '<dl class="kv">' + rows.map(([k, v]) => `<dt>${k}</dt><dd>${v}</dd>`).join('') + '</dl>';
   const warnings = r.warnings.slice();

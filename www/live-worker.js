@@ -22,7 +22,7 @@
 //   started   {startRow, totalRows, rowCount, stats, info, config, tStart, tEnd, resumed}
 //   ended     {nextRow, rowCount, stats}
 //   error     {phase, message}
-import init, { Detector, simulate, readLog, columnNames, snapshotInfo, scenarioNames, version } from './pkg/navguard.js';
+import init, { loadLab, Detector, simulate, readLog, columnNames, snapshotInfo, scenarioNames, version } from './pkg/navguard.js';
 
 const TICK_MS = 250;      // UI updates at most 4 times a second
 const SAVE_MS = 2000;     // a snapshot for IndexedDB every 2 s of wall time
@@ -60,6 +60,8 @@ self.onmessage = async (ev) => {
   const id = msg.id;
   try {
     await ready;
+    // A simulated source needs the lab wasm module, loaded on first use.
+    if (msg.source?.kind === 'sim') await loadLab();
     if (!COLS) COLS = columnNames();
     switch (msg.type) {
       case 'hello':

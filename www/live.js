@@ -475,8 +475,8 @@ function render() {
   setText('rows', int(L.rowCount));
   setText('progress', L.totalRows ? `${int(L.nextRow)} / ${int(L.totalRows)} (${(100 * L.nextRow / L.totalRows).toFixed(1)} %)` : int(L.nextRow));
   setText('retrains', int(st.retrains));
-  setText('gps', int(st.gps_epochs));
-  setText('resets', `${int(st.filter_resets)} / ${int(st.data_gaps)}`);
+  setText('gps', int(st.gpsEpochs));
+  setText('resets', `${int(st.filterResets)} / ${int(st.dataGaps)}`);
   setText('errors', L.rowErrors ? `${int(L.rowErrors)} (${L.lastRowError})` : 'none');
   setText('snap', L.info ? `${fmtBytes(L.info.bytes)} · format v${L.info.version} · navguard ${L.info.crateVersion}` : '—');
   setText('saved', !L.persist ? `not saved (${L.persistError})`

@@ -9,8 +9,8 @@
 //         ganModel ('trained' | 'embedded' | null), ganT2 (trained model's T2),
 //         faultyPrn, faultStart, faultEnd, rows, tEnd, epochs, ms}
 //        {type:'error', id, message}
-// `epochs`: GNSS epochs only, as arrays t, status, prn, lambda (lambda_max),
-// statistic, rdpop, action, nSats, ganScore (gan_score_max) (null where not
+// `epochs`: GNSS epochs only, as arrays t, status, prn, lambda (lambdaMax),
+// statistic, rdpop, action, nSats, ganScore (ganScoreMax) (null where not
 // defined).
 //
 // "Train a GAN in the browser": tightGanTrain is one synchronous wasm call, so

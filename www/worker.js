@@ -18,7 +18,10 @@
 // A comparison runs in slices of ~50 ms, so audit messages are served in
 // between (each job keeps its own wasm object).
 import { flightSeries, renderReport } from './report-html.js';
-import init, { Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, tightGanTrain, version } from './pkg/navguard.js';
+import init, { loadLab, Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, tightGanTrain, version } from './pkg/navguard.js';
+
+// Messages that need the lab wasm module, loaded on the first of them.
+const LAB = new Set(['compare', 'tight', 'gan-train', 'sim']);
 
 const ready = init();
 let bytes = null;     // Uint8Array of the current log
@@ -41,6 +44,7 @@ self.onmessage = async (ev) => {
   const id = msg.id;
   try {
     await ready;
+    if (LAB.has(msg.type)) await loadLab();
     if (msg.type === 'hello') {
       const d = new Detector(undefined);
       const defaults = d.config();
@@ -190,13 +194,13 @@ function tight(id, msg) {
     if (o.status === 'no-gnss') continue;
     ep.t.push(o.t);
     ep.status.push(o.status);
-    ep.prn.push(o.faulty_prn ?? null);
-    ep.lambda.push(val(o.lambda_max));
+    ep.prn.push(o.faultyPrn ?? null);
+    ep.lambda.push(val(o.lambdaMax));
     ep.statistic.push(val(o.statistic));
     ep.rdpop.push(val(o.rdpop));
     ep.action.push(o.action ?? null);
-    ep.nSats.push(o.n_sats ?? null);
-    ep.ganScore.push(val(o.gan_score_max));
+    ep.nSats.push(o.nSats ?? null);
+    ep.ganScore.push(val(o.ganScoreMax));
   }
   return {
     type: 'tight-result', id, env, faultType, seed,

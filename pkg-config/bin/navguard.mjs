@@ -21,7 +21,7 @@ import { parseArgs, suggest } from '../lib/args.mjs';
 import { verdictOf, faultList, flightSeries, renderReport, qualityLabel, fmtUtc, fmtSince, checkedWithoutGps } from '../lib/html-report.mjs';
 
 const require = createRequire(import.meta.url);
-const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
+const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'node.cjs'));
 
 const USAGE = `usage:
   navguard audit FILE [--json] [--per-sample OUT.csv] [--html OUT.html] [--config CFG.json] [--fail-on-fault]

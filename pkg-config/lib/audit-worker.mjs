@@ -11,7 +11,7 @@ import { streamAudit } from './stream-audit.mjs';
 import { flightSeries } from './html-report.mjs';
 
 const require = createRequire(import.meta.url);
-const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
+const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'node.cjs'));
 
 parentPort.on('message', ({ file, config, series }) => {
   const t0 = performance.now();

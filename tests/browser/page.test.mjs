@@ -479,7 +479,7 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
     await page.waitForFunction((n) => Number(document.querySelector('#live-rows').textContent.replace(/,/g, '')) >= n, saved.rowCount + K, { timeout: 5000 });
     // (b) the resumed detector's counters are the snapshotted ones
     assert.deepEqual(after.startStats, saved.stats);
-    assert.ok(after.stats.retrains >= saved.stats.retrains && after.stats.gps_epochs > saved.stats.gps_epochs, JSON.stringify(after.stats));
+    assert.ok(after.stats.retrains >= saved.stats.retrains && after.stats.gpsEpochs > saved.stats.gpsEpochs, JSON.stringify(after.stats));
 
     // (c) outputs after the resume equal an uninterrupted detector's, computed
     // here with the same package; a fresh detector started at the saved row
@@ -488,6 +488,7 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
       const rec = await window.__navguardLive.fetchRecord();
       const m = await import('./pkg/navguard.js');
       await m.default();
+      await m.loadLab(); // the lab module (simulators, compare, tight) loads on demand
       const log = m.readLog(new TextEncoder().encode(m.simulate('paper', 1)));
       const names = m.columnNames();
       const cols = names.map((k) => log.columns[k] || null);
@@ -562,6 +563,7 @@ async function storeRecord(page, rows, damage) {
   await page.evaluate(async ({ rows, damage }) => {
     const m = await import('./pkg/navguard.js');
     await m.default();
+    await m.loadLab(); // the lab module (simulators, compare, tight) loads on demand
     const log = m.readLog(new TextEncoder().encode(m.simulate('paper', 1)));
     const d = new m.Detector(undefined);
     const cols = {};
@@ -814,6 +816,7 @@ test('compare methods: all 8 methods over seed 1, progress to 100 %, tables matc
     const direct = await page.evaluate(async () => {
       const m = await import('./pkg/navguard.js');
       await m.default();
+      await m.loadLab(); // the lab module (simulators, compare, tight) loads on demand
       const run = new m.CompareRun({ seeds: 1 });
       let n = 0;
       while (run.step() < 1 && n < 100000) n++;
@@ -958,6 +961,7 @@ test('tightly coupled panel: Env 1, 20 m step, seed 7 names the injected satelli
     const direct = await page.evaluate(async () => {
       const m = await import('./pkg/navguard.js');
       await m.default();
+      await m.loadLab(); // the lab module (simulators, compare, tight) loads on demand
       const s = m.tightSimulate(1, 1, 7);
       return { faultyPrn: s.faultyPrn, faultStart: s.faultStart, faultEnd: s.faultEnd };
     });
@@ -1013,11 +1017,12 @@ test('tightly coupled panel: GAN-FDSR (embedded model) names the injected satell
     const direct = await page.evaluate(async () => {
       const m = await import('./pkg/navguard.js');
       await m.default();
+      await m.loadLab(); // the lab module (simulators, compare, tight) loads on demand
       const s = m.tightSimulate(1, 1, 7);
       const out = new m.TightDetector({ ...s.config, strategy: 'gan' }).pushCsv(s.csv);
       const first = out.find((o) => o.status === 'fault' && o.t >= s.faultStart);
-      const scores = out.map((o) => o.gan_score_max).filter((v) => typeof v === 'number' && Number.isFinite(v));
-      return { faultyPrn: s.faultyPrn, faultStart: s.faultStart, firstT: first?.t, firstPrn: first?.faulty_prn, maxScore: Math.max(...scores) };
+      const scores = out.map((o) => o.ganScoreMax).filter((v) => typeof v === 'number' && Number.isFinite(v));
+      return { faultyPrn: s.faultyPrn, faultStart: s.faultStart, firstT: first?.t, firstPrn: first?.faultyPrn, maxScore: Math.max(...scores) };
     });
     assert.equal(direct.firstPrn, direct.faultyPrn, JSON.stringify(direct));
     const prnCell = await page.textContent('#tight-table tr[data-key="prn"] td');

@@ -172,10 +172,14 @@ test('compare: every requested method over the battery; --update-readme rewrites
 });
 
 test('TypeScript types describe config, sample and results (no any)', () => {
-  const dts = readFileSync(join(root, 'pkg', 'navguard.d.ts'), 'utf8');
+  const dts = readFileSync(join(root, 'pkg', 'index.d.ts'), 'utf8');
   assert.match(dts, /push\(sample: NavSample\): PushResult/);
   assert.match(dts, /pushColumns\(columns: NavColumns\): ColumnsResult/);
-  assert.match(dts, /constructor\(config: DetectorConfig \| undefined\)/);
+  // Optional arguments are optional (issue 16): `new Detector()`, `auditBytes(bytes)`.
+  assert.match(dts, /constructor\(config\?: DetectorConfig\)/);
+  assert.match(dts, /export function auditBytes\(bytes: Uint8Array, config\?: DetectorConfig\): AuditResult/);
+  // The package's internals are not API.
+  assert.doesNotMatch(dts, /__memory|__ioOffset|__pushIo|initSync|Symbol\.dispose/);
   assert.match(dts, /export interface DetectorConfig/);
   assert.doesNotMatch(dts.split('\n').filter((l) => /push|constructor|auditBytes/.test(l)).join('\n'), /\bany\b/);
 });

@@ -17,7 +17,7 @@ test('TightDetector flags a 20 m pseudo-range step at onset and names the satell
   const first = out.find((o) => o.t >= sim.faultStart - 1e-9 && o.status !== 'no-gnss');
   assert.ok(Math.abs(first.t - sim.faultStart) < 1e-6, `first epoch ${first.t} vs ${sim.faultStart}`);
   assert.equal(first.status, 'fault');
-  assert.equal(first.faulty_prn, sim.faultyPrn);
+  assert.equal(first.faultyPrn, sim.faultyPrn);
   const before = out.filter((o) => o.t < sim.faultStart && o.status === 'fault').length;
   assert.ok(before <= 2, `${before} false alarms before the fault`);
   // The same rows one by one through push() give the same verdicts.
@@ -48,16 +48,16 @@ function stepVerdict(sim, out) {
     before: flagged.filter((o) => o.t < sim.faultStart - 1e-9).length,
     section: flagged.filter(inSection).length,
     sectionEpochs: g.filter(inSection).length,
-    otherPrn: flagged.filter((o) => inSection(o) && o.faulty_prn !== sim.faultyPrn).length,
+    otherPrn: flagged.filter((o) => inSection(o) && o.faultyPrn !== sim.faultyPrn).length,
   };
 }
 
-test('GAN-FDSR (strategy "gan", embedded model) names the 20 m step satellite; method alias; gan_score_max', () => {
+test('GAN-FDSR (strategy "gan", embedded model) names the 20 m step satellite; method alias; ganScoreMax', () => {
   const sim = ng.tightSimulate(1, 1, 7);
   const out = new ng.TightDetector({ ...sim.config, strategy: 'gan' }).pushCsv(sim.csv);
   const v = stepVerdict(sim, out);
   assert.ok(v.first, 'the step is never flagged');
-  assert.equal(v.first.faulty_prn, sim.faultyPrn, `named G${v.first.faulty_prn}, injected G${sim.faultyPrn}`);
+  assert.equal(v.first.faultyPrn, sim.faultyPrn, `named G${v.first.faultyPrn}, injected G${sim.faultyPrn}`);
   // Measured: flagged at the first faulty epoch with seeds 1, 2, 3 and 7 (the
   // model's λ test fires at once; the windowed GAN score alone took 1–5 s).
   const delay = v.first.t - sim.faultStart;
@@ -76,18 +76,18 @@ test('GAN-FDSR (strategy "gan", embedded model) names the 20 m step satellite; m
   // The GAN score: finite on (almost) every GNSS epoch once the windows are full.
   const g = gnss(out);
   const late = g.filter((o) => o.t >= g[0].t + 50);
-  const finite = late.filter((o) => typeof o.gan_score_max === 'number' && Number.isFinite(o.gan_score_max));
+  const finite = late.filter((o) => typeof o.ganScoreMax === 'number' && Number.isFinite(o.ganScoreMax));
   assert.ok(finite.length >= 0.9 * late.length, `${finite.length}/${late.length} epochs after 50 s have a score`);
   // The onset epoch's statistic is the test that fired: the GAN score (above
   // T2 < 1) or the λ test (|λ| > T1 = 3.29; measured 6.8 with seed 7).
-  assert.ok(v.first.statistic === v.first.gan_score_max || Math.abs(v.first.statistic) > 3.29, `onset statistic ${v.first.statistic}`);
+  assert.ok(v.first.statistic === v.first.ganScoreMax || Math.abs(v.first.statistic) > 3.29, `onset statistic ${v.first.statistic}`);
   // Scores are not constant (measured 0.39..1.02) and larger in the section.
-  const sMax = Math.max(...finite.map((o) => o.gan_score_max));
-  const sMin = Math.min(...finite.map((o) => o.gan_score_max));
+  const sMax = Math.max(...finite.map((o) => o.ganScoreMax));
+  const sMin = Math.min(...finite.map((o) => o.ganScoreMax));
   assert.ok(sMax - sMin > 0.1, `score range ${sMin}..${sMax}`);
   // Other strategies: no GAN score (serde_wasm_bindgen gives undefined for None).
   const fdi = new ng.TightDetector({ ...sim.config, strategy: 'fdi' }).pushCsv(sim.csv);
-  assert.ok(fdi.every((o) => o.gan_score_max == null), 'fdi outputs carry a GAN score');
+  assert.ok(fdi.every((o) => o.ganScoreMax == null), 'fdi outputs carry a GAN score');
 });
 
 test('GAN-FDSR on the fault-free Env 1 flight: few false alarms', () => {
@@ -96,7 +96,7 @@ test('GAN-FDSR on the fault-free Env 1 flight: few false alarms', () => {
   const flagged = g.filter((o) => o.status === 'fault');
   // Measured: 1 flagged epoch of 420 with seed 7 (3 with seeds 1, 2, 3).
   assert.ok(g.length >= 400, `${g.length} GNSS epochs`);
-  assert.ok(flagged.length <= 3, `${flagged.length} flagged epochs of ${g.length}: ${flagged.map((o) => `${o.t}:G${o.faulty_prn}`).join(' ')}`);
+  assert.ok(flagged.length <= 3, `${flagged.length} flagged epochs of ${g.length}: ${flagged.map((o) => `${o.t}:G${o.faultyPrn}`).join(' ')}`);
 });
 
 test('tightGanTrain: progress, model bytes, withGanModel detects the step; errors and cancel', () => {
@@ -128,14 +128,14 @@ test('tightGanTrain: progress, model bytes, withGanModel detects the step; error
   const out = ng.TightDetector.withGanModel(sim.config, res.model).pushCsv(sim.csv);
   const v = stepVerdict(sim, out);
   assert.ok(v.first, 'the trained model never flags the step');
-  assert.equal(v.first.faulty_prn, sim.faultyPrn);
+  assert.equal(v.first.faultyPrn, sim.faultyPrn);
   // Measured (2 epochs): first flag 202 s (delay 3 s), 16 of 20 section epochs
   // flagged, one of them (217 s) naming G28 instead of G24.
   assert.ok(v.first.t - sim.faultStart <= 6, `delay ${v.first.t - sim.faultStart} s`);
   assert.ok(v.section >= 10, `${v.section}/${v.sectionEpochs} section epochs flagged`);
   assert.ok(v.otherPrn <= 2, `${v.otherPrn} section flags name another satellite`);
   assert.ok(v.before <= 2, `${v.before} false alarms before the fault`);
-  assert.ok(gnss(out).filter((o) => Number.isFinite(o.gan_score_max)).length > 350);
+  assert.ok(gnss(out).filter((o) => Number.isFinite(o.ganScoreMax)).length > 350);
   // The bytes round-trip: a second detector from the same bytes agrees.
   assert.deepEqual(ng.TightDetector.withGanModel(sim.config, res.model).pushCsv(sim.csv), out);
 });

@@ -1,5 +1,6 @@
-//! Reading values the user hands to the wasm API, through catching imports
-//! only.
+//! Every JS <-> Rust conversion of the facade: reading what the user hands
+//! to the wasm API (through catching imports only), the shared config
+//! checker, "undefined/null means default", and results as JS values.
 //!
 //! Why: a JS exception thrown inside an import that is not declared `catch`
 //! (a getter or Proxy trap reached by `Object.keys`, by serde-wasm-bindgen's
@@ -19,6 +20,8 @@
 //! not a trap.
 
 use js_sys::{Array, Float64Array, Object, Reflect, Uint8Array};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
 use serde_json::{Map, Number, Value};
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -357,8 +360,83 @@ pub fn num(v: &JsValue, what: &str) -> Result<f64, String> {
 
 /// An optional boolean argument (`undefined` / `null`: false).
 pub fn flag(v: &JsValue, what: &str) -> Result<bool, String> {
-    if v.is_undefined() || v.is_null() {
-        return Ok(false);
+    match given(v) {
+        None => Ok(false),
+        Some(v) => v.as_bool().ok_or_else(|| format!("{what}: must be a boolean")),
     }
-    v.as_bool().ok_or_else(|| format!("{what}: must be a boolean"))
+}
+
+/// The one rule for optional arguments and options: `undefined` and `null`
+/// mean "use the default" (`None`); anything else is the value to check.
+pub fn given(v: &JsValue) -> Option<&JsValue> {
+    if v.is_undefined() || v.is_null() {
+        None
+    } else {
+        Some(v)
+    }
+}
+
+/// A message as a JS `Error`.
+pub fn err(msg: impl core::fmt::Display) -> JsError {
+    JsError::new(&msg.to_string())
+}
+
+/// Largest byte input (a log, a snapshot, a CSV chunk) per call.
+pub const MAX_BYTES: usize = 1 << 31;
+/// Largest numeric array per call (`metrics`).
+pub const MAX_VALUES: usize = 1 << 27;
+/// Largest text argument (`TightDetector.pushCsv`), UTF-16 units.
+pub const MAX_TEXT: usize = 1 << 26;
+/// Largest name argument (scenario, log name).
+pub const MAX_NAME: usize = 4096;
+
+/// The checked detector config: the same checker as
+/// `ConfigInput::from_json` (both go through `ConfigInput::from_value`).
+/// Fields are read once each, by name, through catching calls: a throwing
+/// getter or Proxy trap is a config error naming the field, and nothing is
+/// left half-done.
+pub fn config_from(v: &JsValue) -> Result<crate::config::Config, JsError> {
+    use crate::config::ConfigInput;
+    let Some(v) = given(v) else { return Ok(crate::config::Config::default()) };
+    if !v.is_object() || v.is_function() {
+        return Err(err("config: must be a plain object"));
+    }
+    for name in own_keys(v, "config").map_err(err)? {
+        ConfigInput::check_field_name(&name).map_err(err)?;
+    }
+    let mut map = Map::new();
+    for name in ConfigInput::FIELDS {
+        let what = format!("config.{name}");
+        let x = get(v, &JsValue::from_str(name), &what).map_err(err)?;
+        if let Some(x) = plain(&x, &what).map_err(err)? {
+            map.insert(name.to_string(), x);
+        }
+    }
+    ConfigInput::from_value(Value::Object(map)).map_err(err)
+}
+
+/// A user object as `T`, copied to plain data first (see [`plain`]);
+/// `undefined` / `null` give `T::default()`.
+pub fn options<T: DeserializeOwned + Default>(v: &JsValue, what: &str) -> Result<T, JsError> {
+    match given(v) {
+        None => Ok(T::default()),
+        Some(v) => plain_of(v, what),
+    }
+}
+
+/// A user object as `T`, copied to plain data first (see [`plain`]).
+pub fn plain_of<T: DeserializeOwned>(v: &JsValue, what: &str) -> Result<T, JsError> {
+    let x = plain(v, what).map_err(err)?.unwrap_or(Value::Null);
+    serde_json::from_value(x).map_err(|e| err(format!("{what}: {e}")))
+}
+
+/// A result as a plain JS value (maps as objects, `None` as undefined).
+pub fn to_js<T: Serialize + ?Sized>(x: &T) -> Result<JsValue, JsError> {
+    let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
+    x.serialize(&ser).map_err(err)
+}
+
+/// `o[k] = v` on a fresh plain object of ours (cannot fail).
+pub fn set(o: &Object, k: &str, v: &JsValue) {
+    let _ = Reflect::set(o, &JsValue::from_str(k), v);
 }

@@ -1,0 +1,31 @@
+//! The wasm-bindgen facade, split by domain as the npm package is: the core
+//! module (feature `wasm-core`: [`detector`], [`audit`]) and the lab module
+//! (feature `wasm-lab`: [`lab`], [`tight`]), each built into its own .wasm by
+//! `.ci/build`. [`interop`] holds every JS <-> Rust conversion both share.
+//! Everything `#[wasm_bindgen]` lives here; the core never sees a JS type.
+//!
+//! Results are plain JS objects (from `#[derive(Serialize)]` structs, one
+//! naming rule: camelCase) and typed arrays (no class handles to free in
+//! loops). Errors are JS `Error`s naming the row and field; an object is
+//! untouched by a rejected row or batch. Each file carries the TypeScript
+//! declarations of what it exports (`typescript_custom_section`).
+
+pub mod interop;
+
+#[cfg(feature = "wasm-core")]
+pub mod audit;
+#[cfg(feature = "wasm-core")]
+pub mod detector;
+#[cfg(feature = "wasm-lab")]
+pub mod lab;
+#[cfg(feature = "wasm-lab")]
+pub mod tight;
+
+#[cfg(feature = "wasm-core")]
+pub use audit::{audit_bytes, metrics, read_log, Auditor, StreamAuditor};
+#[cfg(feature = "wasm-core")]
+pub use detector::{column_names, scenario_names, snapshot_info, version, Detector, MAX_BATCH_ROWS};
+#[cfg(feature = "wasm-lab")]
+pub use lab::{simulate, simulate_scenario, train_from_csv, CompareRun};
+#[cfg(feature = "wasm-lab")]
+pub use tight::{tight_gan_train, tight_simulate, TightDetectorJs};
