@@ -18,10 +18,19 @@ export function verdictOf(report) {
   return faultList(report).length > 0 ? 'faults' : 'clean';
 }
 
-/** The intervals to show: the reconciled list when the report has one. */
+/**
+ * The intervals to show: the causal `faults`, as the streaming API and
+ * `audit --json` give them, so every table counts the same intervals.
+ * (`report.reconciled` joins flicker of one kind; `reconciledCount` says how
+ * many intervals that leaves.)
+ */
 export function faultList(report) {
-  const r = report && (report.reconciled || report.reconciledFaults);
-  return Array.isArray(r) ? r : (report && report.faults) || [];
+  return (report && report.faults) || [];
+}
+
+/** How many intervals the whole-log reconciliation leaves, or null. */
+export function reconciledCount(report) {
+  return report && Array.isArray(report.reconciled) ? report.reconciled.length : null;
 }
 
 /** What the receiver-quality value is: "HDOP" (unitless) or "eph (m)". */
@@ -453,7 +462,8 @@ function flightSection(fl, i) {
   const t0 = Number.isFinite(report.startT) ? report.startT : series ? series.t0 : 0;
   L.push(summaryList(report, name));
   if (!report.gpsAvailable) L.push(`<p class="note nogps">${esc(checkedWithoutGps(report))}</p>`);
-  L.push(`<h3>Fault intervals (${faultList(report).length})</h3>`);
+  const rc = reconciledCount(report);
+  L.push(`<h3>Fault intervals (${faultList(report).length}${rc !== null && rc !== faultList(report).length ? `; ${rc} once gaps under 2 s are joined` : ''})</h3>`);
   L.push(faultTable(report, t0));
   if (series) L.push(plots(i, report, series));
   L.push(eventTables(report, t0));

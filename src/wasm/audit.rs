@@ -15,11 +15,17 @@ use crate::sample::COLUMNS;
 #[wasm_bindgen(typescript_custom_section)]
 const TS_AUDIT: &'static str = r#"
 export interface Metrics { tp: number; fp: number; tn: number; fn: number; accuracy: number; falseAlarmRate: number; misdetectionRate: number; precision: number; recall: number; f2: number; meanDetectionDelay: number; faultIntervals: number; detectedIntervals: number }
-export interface FaultInterval { start: number; end: number; kind: "gps_outage" | "residual"; peakF: number; driver: "gps_position" | "gps_velocity" | "baro" | "imu" | "none"; indicator: "R" | "C" | "none"; rows: number }
+export interface FaultInterval {
+  start: number; end: number; kind: "gps_outage" | "residual"; peakF: number; driver: "gps_position" | "gps_velocity" | "baro" | "imu" | "none"; indicator: "R" | "C" | "none"; rows: number;
+  /** Largest offset of the driving sensor from the filter's prediction, in `offsetUnit`; null for an outage. */
+  peakOffset: number | null; offsetUnit: "m" | "m/s" | "";
+  durationS: number; severity: "low" | "medium" | "high";
+}
 export interface AuditReport {
   format: "csv" | "ulog" | "dataflash"; rows: number; durationS: number; gpsEpochs: number; gpsRateHz: number; imuRateHz: number;
   gpsAvailable: boolean; gpsFixFraction: number; flaggedGpsEpochFraction: number;
-  faults: FaultInterval[]; dataGaps: { start: number; end: number }[]; missing: string[]; warnings: string[];
+  /** Causal intervals, as `push` gave them; `reconciled`: the same over the whole log, gaps under 2 s (or 3 GPS periods) of one kind joined. */
+  faults: FaultInterval[]; reconciled: FaultInterval[]; dataGaps: { start: number; end: number }[]; missing: string[]; warnings: string[];
   meta: [string, string][]; metrics?: Metrics; stats: DetectorStats;
   /** Boot-clock s of the first row; show times as t - startT. startUtc: ISO 8601 UTC of the first row when the log has GPS time. */
   startT: number; startUtc?: string;
