@@ -28,6 +28,7 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::error::ConfigError;
 use crate::thresholds::{Evaluator, SpeedBands, Verdict};
 
 /// Detection method (`config.method`).
@@ -62,10 +63,11 @@ impl Method {
         }
     }
 
-    pub fn parse(s: &str) -> Result<Method, String> {
+    /// The method named `s` (as in `config.method`); the error lists them.
+    pub fn parse(s: &str) -> Result<Method, ConfigError> {
         Method::ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
             let names: Vec<String> = Method::ALL.iter().map(|m| format!("\"{}\"", m.name())).collect();
-            format!("config.method: unknown method \"{s}\" (available: {})", names.join(", "))
+            ConfigError::new("method", format!("unknown method \"{s}\" (available: {})", names.join(", ")))
         })
     }
 }
@@ -481,7 +483,7 @@ mod tests {
         for m in Method::ALL {
             assert_eq!(Method::parse(m.name()).unwrap(), m);
         }
-        let e = Method::parse("magic").unwrap_err();
+        let e = Method::parse("magic").unwrap_err().to_string();
         assert!(e.contains("config.method") && e.contains("magic") && e.contains("\"knee\""), "{e}");
     }
 }
