@@ -51,16 +51,27 @@ pub struct ConfigInput {
 /// Checked configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Config {
+    /// Detection method (see [`crate::methods`]).
     pub method: Method,
+    /// Training condition TC: retrain after this many new fault epochs.
     pub tc: usize,
+    /// Length q of each database D1, D2 (epochs).
     pub q: usize,
+    /// Indicator window (GPS epochs).
     pub window: usize,
+    /// F-indicator decision threshold.
     pub threshold: f64,
+    /// Online retraining on/off.
     pub retrain: bool,
+    /// Filter noise (σ of each sensor).
     pub noise: FilterNoiseCfg,
+    /// Time without a fix that counts as an outage, s (`None`: from the GPS rate).
     pub outage_timeout: Option<f64>,
+    /// Longest coast on rejected GPS before re-anchoring the filter, s.
     pub max_coast: f64,
+    /// A pause with no rows longer than this is a logging gap, s.
     pub data_gap: f64,
+    /// A trained model (`None`: the embedded default).
     #[serde(skip)]
     pub model: Option<crate::model::Model>,
 }
@@ -68,11 +79,17 @@ pub struct Config {
 /// Serializable mirror of the filter noise (for reports).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FilterNoiseCfg {
+    /// GPS horizontal position noise, m.
     pub gps_pos_sigma: f64,
+    /// GPS vertical position noise, m.
     pub gps_alt_sigma: f64,
+    /// GPS velocity noise, m/s.
     pub gps_vel_sigma: f64,
+    /// Barometer noise, m.
     pub baro_sigma: f64,
+    /// Accelerometer noise for the INS prediction, m/s².
     pub accel_noise: f64,
+    /// Acceleration noise of the constant-velocity model (GPS only), m/s².
     pub cv_accel_noise: f64,
 }
 
@@ -224,6 +241,7 @@ impl Config {
         }
     }
 
+    /// The filter noise in the filter's own form.
     pub fn filter_noise(&self) -> FilterNoise {
         let n = &self.noise;
         FilterNoise {
@@ -237,6 +255,7 @@ impl Config {
         }
     }
 
+    /// The indicator settings this config implies (its window).
     pub fn indicator_settings(&self) -> IndicatorSettings {
         IndicatorSettings { window: self.window, ..IndicatorSettings::default() }
     }

@@ -35,21 +35,31 @@ use crate::thresholds::{Evaluator, SpeedBands, Verdict};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
+    /// The online KF–ANFIS of Sun et al. 2017 (default).
     #[default]
     Anfis,
+    /// Per-measurement normalised-innovation test (Shen et al. Appendix A).
     Chi2,
+    /// Whole-vector chi-square test on the NIS.
     Nis,
+    /// 5-σ innovation gate per channel (PX4 EKF2, ArduPilot EKF3).
     Gate,
+    /// Mahalanobis distance of the residual increment (Lin, Khalastchi).
     Mahalanobis,
+    /// Baek & Jo RMS threshold (RT).
     Rms,
+    /// Baek & Jo knee threshold (KT).
     Knee,
+    /// Baek & Jo adaptive threshold (AT).
     Adaptive,
 }
 
 impl Method {
+    /// Every method, the default first.
     pub const ALL: [Method; 8] =
         [Method::Anfis, Method::Chi2, Method::Nis, Method::Gate, Method::Mahalanobis, Method::Rms, Method::Knee, Method::Adaptive];
 
+    /// The name users give in `config.method`.
     pub fn name(self) -> &'static str {
         match self {
             Method::Anfis => "anfis",
@@ -87,9 +97,11 @@ pub const GATE_SIGMA: f64 = 5.0;
 /// the receiver gives no velocity.
 #[derive(Clone, Copy, Debug)]
 pub struct EpochInnovations {
+    /// Innovations ν: position N/E/D (m), velocity N/E/D (m/s).
     pub nu: [f64; 6],
     /// Full `S = H P⁻ Hᵀ + R` (top-left m×m block used).
     pub s: SMatrix<f64, 6, 6>,
+    /// Number of GPS channels present (3 or 6).
     pub m: usize,
     /// The barometer's largest normalised innovation since the last GPS
     /// epoch, as (ν m, S m²), if a baro sample was checked.
@@ -114,7 +126,9 @@ impl EpochInnovations {
 /// (position, velocity), whether that group failed its own test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Decision {
+    /// Test statistic over its threshold: ≥ 1 is a fault.
     pub score: f64,
+    /// Per group (position, velocity, baro): failed its own test.
     pub failed: [bool; 3],
 }
 
@@ -212,6 +226,7 @@ fn outer(x: &[f64; 3]) -> [f64; 6] {
 }
 
 impl MahaWindow {
+    /// Empty the window (a new reference after an episode or a reset).
     pub fn clear(&mut self) {
         self.head = 0;
         self.len = 0;
@@ -290,10 +305,12 @@ impl MahaWindow {
         }
     }
 
+    /// Epochs in the window.
     pub fn len(&self) -> usize {
         self.len
     }
 
+    /// No epoch yet.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -317,7 +334,9 @@ pub fn mahalanobis(win: &[MahaWindow; 2], dr: [[f64; 3]; 2], has_vel: bool) -> D
 /// largest normalised innovation), one threshold per speed band.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PoolState {
+    /// Operating modes by horizontal speed.
     pub bands: SpeedBands,
+    /// The threshold pool and its streaming state.
     pub eval: Evaluator,
 }
 

@@ -59,8 +59,11 @@ struct Header<'a> {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Info {
+    /// Snapshot format version ([`VERSION`] when this build can read it).
     pub version: u32,
+    /// The navguard version that wrote it.
     pub crate_version: String,
+    /// Size of the snapshot, bytes.
     pub bytes: usize,
 }
 
