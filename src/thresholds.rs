@@ -137,7 +137,10 @@ pub enum Verdict {
     /// A transient fault. Every sample of the last `backdate` samples that
     /// was reported [`Verdict::Anomaly`] now belongs to this fault too
     /// (always 0 for RT, which has a single stage).
-    Fault { backdate: u32 },
+    Fault {
+        /// How many earlier samples the fault reaches back over.
+        backdate: u32,
+    },
 }
 
 impl Verdict {
@@ -636,8 +639,11 @@ pub fn fit_adaptive(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<AdaptiveT
 /// One operating mode's threshold, of any method.
 #[serde(rename_all = "lowercase")]
 pub enum ModeThreshold {
+    /// RMS threshold.
     Rt(RmsThreshold),
+    /// Knee threshold.
     Kt(KneeThreshold),
+    /// Adaptive threshold.
     At(AdaptiveThreshold),
 }
 
