@@ -155,7 +155,8 @@ fn main() {
                 let Ok(o) = det.push(s) else { continue };
                 if s.t >= a && s.t <= b && (o.gps_epoch || s.fix.is_finite()) {
                     let i = det.indicators();
-                    println!("{:8.2} fix {} sats {} st {} k {} f {:6.3} r {:6.2} c {:4.2} pv {:5.2} bc {:5.2} im {:5.2} rg {:?} pos {:?}", s.t, s.fix, s.sats, o.status, o.kind, o.f, o.r, o.c, i.pv, i.baro_cons, i.imu, i.r_group.map(|v| (v * 100.0).round() / 100.0), det.position().map(|p| (p[2]*10.0).round()/10.0));
+                    let rd = |v: f64| (v * 100.0).round() / 100.0;
+                    println!("{:8.2} fix {} st {} k {} f {:5.2} r {:6.2} c {:4.2} pv {:5.2} bc {:5.2} im {:5.2} rg {:?} cg {:?} ig {:?} nu {:?} sg {:?} clk {:.4}", s.t, s.fix, o.status, o.kind, o.f, o.r, o.c, rd(i.pv), rd(i.baro_cons), rd(i.imu), i.r_group.map(rd), i.c_group.map(rd), i.inc_group.map(rd), det.residuals().map(rd), core::array::from_fn::<f64, 7, _>(|a| rd(det.indicator_engine().sigma(a))), det.clock_rate());
                 }
             }
         }

@@ -10,6 +10,7 @@ use crate::indicators::DRIVER_NAMES;
 use crate::logs::csv::CsvReader;
 use crate::logs::dataflash::DataflashStream;
 use crate::logs::ulog::UlogStream;
+use crate::logs::extras::{iso_utc, EphSource, Extras, LogMessage, ModeChange};
 use crate::logs::{sniff, Format, LogData, LogSummary, RowSink, FEED_CHUNK};
 use crate::metrics::{self, Metrics};
 use crate::sample::Sample;
@@ -30,7 +31,110 @@ pub struct FaultInterval {
     /// Which indicator was further above its clean level at the peak: "R" or "C".
     pub indicator: &'static str,
     pub rows: u64,
+    /// Largest offset of the driving sensor from the filter's prediction
+    /// inside the interval (the reference: the estimate coasting on the IMU
+    /// and, for a position-only fault, the GPS velocity): position and baro
+    /// in m, velocity in m/s (see `offset_unit`). None for an outage.
+    pub peak_offset: Option<f64>,
+    /// "m", "m/s", or "" for an outage.
+    pub offset_unit: &'static str,
+    /// `end - start`, s.
+    pub duration_s: f64,
+    /// "low", "medium" or "high" (see [`severity`]).
+    pub severity: &'static str,
 }
+
+impl FaultInterval {
+    /// Close the interval: its duration and severity.
+    fn closed(mut self) -> Self {
+        self.duration_s = self.end - self.start;
+        self.severity = severity(self.kind, self.offset_unit, self.peak_offset, self.duration_s);
+        self
+    }
+
+    /// One interval spanning `self` and a later `o` of the same kind.
+    fn merged(mut self, o: &FaultInterval) -> Self {
+        self.end = o.end;
+        self.rows += o.rows;
+        if o.peak_f > self.peak_f {
+            self.peak_f = o.peak_f;
+            self.driver = o.driver;
+            self.indicator = o.indicator;
+        }
+        if o.offset_unit == self.offset_unit {
+            self.peak_offset = max_opt(self.peak_offset, o.peak_offset);
+        }
+        self.closed()
+    }
+}
+
+fn max_opt(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(x), Some(y)) => Some(x.max(y)),
+        (x, None) => x,
+        (None, y) => y,
+    }
+}
+
+/// An interval's severity for an operator. `high`: the estimate would be
+/// off by more than a multirotor's usual obstacle margin (10 m, 2 m/s of
+/// velocity, 10 m of height by the baro), or the fault (or outage) lasted
+/// 30 s or more, long enough for a position hold to drift away; `medium`:
+/// more than 3 m (0.5 m/s), or 5 s or more; `low` otherwise (a short
+/// departure a few metres wide, within a consumer receiver's own error
+/// bound). Physical margins, not detector constants: they grade what an
+/// interval means for the flight, not whether it is flagged.
+pub fn severity(kind: &str, unit: &str, peak_offset: Option<f64>, duration_s: f64) -> &'static str {
+    let (high, medium) = match unit {
+        "m/s" => (2.0, 0.5),
+        _ => (10.0, 3.0),
+    };
+    let off = if kind == "gps_outage" { None } else { peak_offset };
+    if duration_s >= 30.0 || off.is_some_and(|x| x >= high) {
+        "high"
+    } else if duration_s >= 5.0 || off.is_some_and(|x| x >= medium) {
+        "medium"
+    } else {
+        "low"
+    }
+}
+
+/// The driving sensor's offset from the filter's prediction on this row
+/// (`resid`: `Detector::residuals`), with its unit.
+fn offset_of(driver: &str, resid: &[f64; 7]) -> (Option<f64>, &'static str) {
+    let norm = |v: &[f64]| {
+        let s: f64 = v.iter().map(|x| x * x).sum();
+        s.is_finite().then(|| s.sqrt())
+    };
+    match driver {
+        "gps_position" => (norm(&resid[0..3]), "m"),
+        "gps_velocity" | "imu" => (norm(&resid[3..6]), "m/s"),
+        "baro" => (resid[6].is_finite().then(|| resid[6].abs()), "m"),
+        _ => (None, ""),
+    }
+}
+
+/// The causal intervals reconciled over the whole log: intervals of the
+/// same kind whose gap is shorter than `RECONCILE_GAP_S` (or 3 GPS
+/// periods, `gps_period` s, if longer) are one fault seen with gaps (a
+/// verdict flickering on an offset near its threshold), so they become one
+/// interval from the first onset to the last end.
+pub fn reconcile(faults: &[FaultInterval], gps_period: f64) -> Vec<FaultInterval> {
+    let max_gap = RECONCILE_GAP_S.max(3.0 * gps_period);
+    let mut out: Vec<FaultInterval> = Vec::with_capacity(faults.len());
+    for iv in faults {
+        match out.last_mut() {
+            Some(last) if last.kind == iv.kind && iv.start - last.end <= max_gap => {
+                *last = last.clone().merged(iv);
+            }
+            _ => out.push(iv.clone()),
+        }
+    }
+    out
+}
+
+/// s: see [`reconcile`].
+pub const RECONCILE_GAP_S: f64 = 2.0;
 
 /// A pause in which every sensor stopped.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -56,6 +160,10 @@ pub struct Report {
     /// Share of GPS epochs flagged (residual faults).
     pub flagged_gps_epoch_fraction: f64,
     pub faults: Vec<FaultInterval>,
+    /// `faults` reconciled over the whole log ([`reconcile`]): what a
+    /// person reading the log afterwards should count as fault intervals.
+    /// `faults` stays the causal verdict, as the streaming `push` gave it.
+    pub reconciled: Vec<FaultInterval>,
     pub data_gaps: Vec<Gap>,
     pub missing: Vec<String>,
     pub warnings: Vec<String>,
@@ -63,6 +171,35 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub metrics: Option<Metrics>,
     pub stats: crate::detector::Stats,
+    /// Boot-clock s of the first row: a time minus this is the time since
+    /// the log's start, as reports show it.
+    pub start_t: f64,
+    /// UTC of the first row, ISO 8601 ("2014-11-06T16:02:14.000Z"), when the
+    /// log carries GPS time (DataFlash GWk/GMS, ULog time_utc_usec).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_utc: Option<String>,
+    /// What the receiver-quality column `eph` holds: "eph" (m), "hdop"
+    /// (unitless; DataFlash logs without GPA) or "none".
+    pub eph_source: EphSource,
+    /// Flight-mode changes (boot-clock s), at most 256.
+    pub modes: Vec<ModeChange>,
+    /// The autopilot's own messages (boot-clock s), at most 256.
+    pub messages: Vec<LogMessage>,
+}
+
+impl Report {
+    /// The log's extras (modes, messages, UTC, eph kind) into the report;
+    /// they change no verdict.
+    fn with_extras(mut self, x: &Extras) -> Report {
+        self.start_utc = x.utc_at_boot.map(|u| iso_utc(u + self.start_t));
+        self.eph_source = x.eph_source;
+        self.modes = x.modes.clone();
+        self.messages = x.messages.clone();
+        if x.dropped > 0 {
+            self.warnings.push(format!("{} flight modes and autopilot messages not listed (at most 256 of each are)", x.dropped));
+        }
+        self
+    }
 }
 
 /// Per-row outputs in columns.
@@ -170,7 +307,7 @@ impl Tally {
     fn report(self, format: &'static str, missing: Vec<String>, meta: Vec<(String, String)>) -> Report {
         let Tally { det, metrics, mut warnings, bad_rows, mut faults, mut open, gaps, first_t, last_t, rows, gps_reports, gps_fixes, flagged_epochs, .. } = self;
         if let Some(iv) = open.take() {
-            faults.push(iv);
+            faults.push(iv.closed());
         }
         if bad_rows > 5 {
             warnings.push(format!("{bad_rows} bad rows skipped in all"));
@@ -192,6 +329,8 @@ impl Tally {
         };
         let active = (duration - gaps.iter().map(|g| g.end - g.start).sum::<f64>()).max(1e-9);
         faults.truncate(MAX_LISTED);
+        let gps_period = if st.gps_epochs > 0 { active / st.gps_epochs as f64 } else { 1.0 };
+        let reconciled = reconcile(&faults, gps_period);
         Report {
             format,
             rows,
@@ -203,12 +342,18 @@ impl Tally {
             gps_fix_fraction: if gps_reports > 0 { gps_fixes as f64 / gps_reports as f64 } else { 0.0 },
             flagged_gps_epoch_fraction: if st.gps_epochs > 0 { flagged_epochs as f64 / st.gps_epochs as f64 } else { 0.0 },
             faults,
+            reconciled,
             data_gaps: gaps,
             missing,
             warnings,
             meta,
             metrics: metrics.any_label.then(|| metrics.metrics()),
             stats: st,
+            start_t: first_t.unwrap_or(0.0),
+            start_utc: None,
+            eph_source: EphSource::None,
+            modes: vec![],
+            messages: vec![],
         }
     }
 }
@@ -326,7 +471,7 @@ impl<L: Borrow<LogData>> AuditRun<L> {
         // rejected is missing (found by the fuzz target that compares the
         // two paths).
         let missing = if log.format == "csv" { self.tally.missing() } else { log.missing.clone() };
-        let report = self.tally.report(log.format, missing, log.meta.clone());
+        let report = self.tally.report(log.format, missing, log.meta.clone()).with_extras(&log.extras);
         (report, self.cols)
     }
 }
@@ -500,7 +645,7 @@ impl StreamAudit {
                 res.map_err(|e| not_csv(&r, e))?;
                 self.drain();
                 let meta = r.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
-                LogSummary { format: "csv", meta, warnings: core::mem::take(&mut r.warnings), missing: self.tally.missing(), topic_counts: vec![] }
+                LogSummary { format: "csv", meta, warnings: core::mem::take(&mut r.warnings), missing: self.tally.missing(), topic_counts: vec![], extras: r.extras() }
             }
             Source::Ulog(r) => {
                 if r.is_planning() {
@@ -514,10 +659,10 @@ impl StreamAudit {
                 r.finish(&mut feed)?
             }
         };
-        let LogSummary { format, meta, mut warnings, missing, .. } = summary;
+        let LogSummary { format, meta, mut warnings, missing, extras, .. } = summary;
         warnings.append(&mut self.tally.warnings);
         self.tally.warnings = warnings;
-        Ok((self.tally.report(format, missing, meta), self.out))
+        Ok((self.tally.report(format, missing, meta).with_extras(&extras), self.out))
     }
 }
 
@@ -559,7 +704,7 @@ fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Ou
     if o.status == 0 {
         if let Some(iv) = open.take() {
             if done.len() < MAX_LISTED {
-                done.push(iv);
+                done.push(iv.closed());
             }
         }
         return;
@@ -569,6 +714,7 @@ fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Ou
     let driver = if o.kind == kind::OUTAGE { "none" } else { ind.r_driver().and_then(|g| DRIVER_NAMES.get(g).copied()).unwrap_or("none") };
     // R is ≈1 when clean and C ≈ 0.2: compare relative excess.
     let indicator = if o.kind == kind::OUTAGE { "none" } else if (o.c - 0.2) / 0.8 > (o.r - 1.0) / 4.0 { "C" } else { "R" };
+    let (offset, unit) = offset_of(driver, &det.residuals());
     match open {
         Some(iv) if iv.kind == kind_name => {
             iv.end = o.t;
@@ -578,14 +724,30 @@ fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Ou
                 iv.driver = driver;
                 iv.indicator = indicator;
             }
+            // The offset of the interval's driver (the first row's unit).
+            if unit == iv.offset_unit {
+                iv.peak_offset = max_opt(iv.peak_offset, offset);
+            }
         }
         _ => {
             if let Some(iv) = open.take() {
                 if done.len() < MAX_LISTED {
-                    done.push(iv);
+                    done.push(iv.closed());
                 }
             }
-            *open = Some(FaultInterval { start: o.t, end: o.t, kind: kind_name, peak_f: o.f, driver, indicator, rows: 1 });
+            *open = Some(FaultInterval {
+                start: o.t,
+                end: o.t,
+                kind: kind_name,
+                peak_f: o.f,
+                driver,
+                indicator,
+                rows: 1,
+                peak_offset: offset,
+                offset_unit: unit,
+                duration_s: 0.0,
+                severity: "low",
+            });
         }
     }
 }

@@ -392,6 +392,8 @@ pub fn markdown(c: &Comparison) -> String {
                 s.push_str(&format!("| {} ({} epochs) |", lr.name, lr.gps_epochs));
                 for m in &c.methods {
                     match m.logs.get(k) {
+                        // No GPS epoch: nothing judged, never shown as a clean 0.00 %.
+                        Some(_) if lr.gps_epochs == 0 => s.push_str(" no verdict |"),
                         Some(r) => s.push_str(&format!(" {}% |", f(100.0 * r.flagged_fraction, 2))),
                         None => s.push_str(" – |"),
                     }
@@ -415,6 +417,21 @@ mod tests {
         for g in ["step", "ramp", "noise", "frozen", "zero-velocity", "baro-stuck", "accel-bias", "outage", "clean"] {
             assert!(b.iter().any(|c| c.group == g), "{g}");
         }
+    }
+
+    /// A real log with no GPS epoch is "no verdict" in the table, never a
+    /// clean 0.00 % (issue 16).
+    #[test]
+    fn a_log_without_gps_is_no_verdict() {
+        let mut csv = String::from("t,ax,ay,az,gx,gy,gz,qw,qx,qy,qz,baro\n");
+        for i in 0..500 {
+            csv.push_str(&format!("{:.2},0,0,-9.81,0,0,0,1,0,0,0,10\n", f64::from(i) / 50.0));
+        }
+        let log = crate::logs::csv::read_csv(csv.as_bytes()).unwrap();
+        let mut run = CompareRun::new(&[1], &[Method::Chi2], None).unwrap();
+        run.add_log("imu.csv", log);
+        let md = markdown(&run.finish().unwrap());
+        assert!(md.contains("| imu.csv (0 epochs) | no verdict |"), "{md}");
     }
 
     #[test]

@@ -478,9 +478,8 @@ struct Consistency {
 /// once `Σ |ΔV|²` reaches `CLOCK_MIN_SXX` (about 70 m flown), clamped to
 /// `CLOCK_RANGE`, and multiplies every time step of the filter and of the
 /// position–velocity test. A clock error always points along the velocity;
-/// a position fault does not and averages out over headings, so blocks in
-/// a position-only episode still count; blocks with the receiver's
-/// velocity withheld do not.
+/// a position fault need not, but a long ramp along a straight leg does, so
+/// blocks inside any fault episode do not count.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct ClockRate {
     /// True seconds per boot-clock second.
@@ -824,13 +823,19 @@ impl Withheld {
             for a in 0..3 {
                 ind.accept(a, prev_r[a], kf.position_var(a), fix.y[a] - p[a]);
             }
+        } else {
+            (0..3).for_each(|a| ind.learn_withheld(a, prev_r[a]));
         }
-        if let (Some(v), false) = (&fix.vel, self.gps_vel()) {
-            kf.update_velocity(v)?;
-            let vel = kf.velocity();
-            for a in 0..3 {
-                ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
+        match (&fix.vel, self.gps_vel()) {
+            (Some(v), false) => {
+                kf.update_velocity(v)?;
+                let vel = kf.velocity();
+                for a in 0..3 {
+                    ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
+                }
             }
+            (Some(_), true) => (3..6).for_each(|a| ind.learn_withheld(a, prev_r[a])),
+            (None, _) => {}
         }
         Ok(())
     }
@@ -1219,6 +1224,18 @@ impl Detector {
         self.resid
     }
 
+    /// The indicator engine (learnt σ_Δ per axis and the windows), for
+    /// diagnosis.
+    pub fn indicator_engine(&self) -> &IndicatorEngine {
+        &self.ind
+    }
+
+    /// The learnt boot-clock rate: true seconds per log second (1 until
+    /// learnt, or within 1% of 1).
+    pub fn clock_rate(&self) -> f64 {
+        self.consistency.rate.scale
+    }
+
     /// Latest indicators (per-group detail included).
     pub fn indicators(&self) -> Indicators {
         self.last_ind
@@ -1419,6 +1436,9 @@ impl Detector {
         let res = self.last_est.residuals(kf, &mut self.ind, &fix);
         res.write(&mut self.resid);
         let vel_withheld = self.episode.withheld.gps_vel();
+        // Not inside any episode: a 60 s position ramp along a straight leg
+        // does not average out over headings and taught the clock a wrong
+        // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate);
         self.last_ind = ind;

@@ -294,6 +294,47 @@ struct AxisState {
     last_r: f64,
     has_prev: bool,
     has_ref: bool,
+    /// Epochs σ_Δ has learnt from (saturating).
+    learnt: u32,
+}
+
+/// The σ_Δ prior (`IndicatorSettings::initial`) counts as this many epochs:
+/// σ_Δ starts as a running mean of Δr² over the prior and the first epochs
+/// ("fast start"), and forgets at `alpha` once `1/alpha` epochs are in.
+/// Why: a fixed forgetting factor from a fixed prior takes ~150 epochs to
+/// reach a receiver 5× noisier than the prior, and the epochs it flags
+/// meanwhile teach it nothing (issue 14, mechanism 4).
+const PRIOR_EPOCHS: f64 = 4.0;
+
+/// The weight of the next sample in a learnt mean square that has learnt
+/// from `learnt` samples: a running mean over the prior (`PRIOR_EPOCHS`)
+/// and the samples until it reaches the forgetting factor `alpha`.
+fn fast_start_weight(alpha: f64, learnt: u32) -> f64 {
+    alpha.max(1.0 / (f64::from(learnt) + PRIOR_EPOCHS))
+}
+
+impl AxisState {
+    /// The weight of the next Δr² in the σ_Δ estimate.
+    fn learn_weight(&self, alpha: f64) -> f64 {
+        fast_start_weight(alpha, self.learnt)
+    }
+
+    /// Still learning its first `1/alpha` epochs.
+    fn warming(&self, alpha: f64) -> bool {
+        f64::from(self.learnt) * alpha < 1.0
+    }
+
+    /// Learn σ_Δ² from one consecutive difference `e` (m or m/s),
+    /// winsorised at 4σ (`sigma`: the σ_Δ in use) so one outlier that
+    /// slipped through cannot inflate it.
+    fn learn(&mut self, e: f64, sigma: f64, alpha: f64) {
+        if !e.is_finite() {
+            return;
+        }
+        let lim = 16.0 * sigma * sigma;
+        self.ms += self.learn_weight(alpha) * ((e * e).min(lim) - self.ms);
+        self.learnt = self.learnt.saturating_add(1);
+    }
 }
 
 /// Settings for the indicator computation.
@@ -370,6 +411,10 @@ struct PvTest {
     inc_cap: usize,
     /// Statistic of the current epoch, NaN when not observed this epoch.
     stat: f64,
+    /// Epochs `ms_u` and `ms` learnt from (saturating): both start fast,
+    /// as σ_Δ does (`PRIOR_EPOCHS`).
+    learnt_u: u32,
+    learnt_s: u32,
 }
 
 /// Initial and floor σ of the window sum `S`, m.
@@ -403,6 +448,8 @@ impl PvTest {
             inc_head: 0,
             inc_cap: cap.div_ceil(4 * PV_WINDOW_FACTOR).clamp(1, 4),
             stat: f64::NAN,
+            learnt_u: 0,
+            learnt_s: 0,
         }
     }
     fn clear(&mut self) {
@@ -485,19 +532,25 @@ impl PvTest {
         if self.len == 0 {
             return;
         }
+        let w_u = fast_start_weight(PV_ALPHA_U, self.learnt_u);
+        self.learnt_u = self.learnt_u.saturating_add(1);
         for a in 0..3 {
             let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
             let x = (self.last_u[a] * self.last_u[a]).min(lim * lim);
-            self.ms_u[a] += PV_ALPHA_U * (x - self.ms_u[a]);
+            self.ms_u[a] += w_u * (x - self.ms_u[a]);
         }
         if self.len < self.ring.len() {
             return;
         }
+        // The window sum's fast start stops at `PV_ALPHA_U`'s horizon: past
+        // it, a slowly growing fault must not be learnt as noise.
+        let w_s = if fast_start_weight(PV_ALPHA_U, self.learnt_s) > PV_ALPHA_U { fast_start_weight(PV_ALPHA, self.learnt_s) } else { PV_ALPHA };
+        self.learnt_s = self.learnt_s.saturating_add(1);
         for a in 0..3 {
             let sg = self.sigma(a);
             // Winsorised at 3σ.
             let x = (self.sum[a] * self.sum[a]).min(9.0 * sg * sg);
-            self.ms[a] += PV_ALPHA * (x - self.ms[a]);
+            self.ms[a] += w_s * (x - self.ms[a]);
         }
     }
 }
@@ -735,6 +788,7 @@ impl IndicatorEngine {
                 last_r: 0.0,
                 has_prev: false,
                 has_ref: false,
+                learnt: 0,
             }
         };
         IndicatorEngine {
@@ -853,17 +907,28 @@ impl IndicatorEngine {
         let Some(a) = self.axes.get_mut(axis) else {
             return;
         };
-        let e = a.last_r - prev_r;
-        if e.is_finite() {
-            // Winsorise at 4σ so one outlier that slipped through cannot inflate σ_Δ.
-            let lim = 16.0 * sigma * sigma;
-            a.ms += alpha * ((e * e).min(lim) - a.ms);
-        }
+        a.learn(a.last_r - prev_r, sigma, alpha);
         let r_post = if r_post.is_finite() { r_post } else { a.last_r };
         a.r_ref = r_post;
         a.prev = r_post;
         a.p_ref = p_post;
         a.p_peak = p_post;
+    }
+
+    /// The detector withheld this axis' measurement (a fault verdict): while
+    /// σ_Δ is still warming up, learn from its consecutive difference all
+    /// the same, winsorised, without moving the reference. A prior far below
+    /// the receiver's noise flags the first epochs; learning only from
+    /// accepted ones would keep it there. A step adds one winsorised
+    /// difference, a ramp or a frozen fix next to nothing.
+    pub fn learn_withheld(&mut self, axis: usize, prev_r: f64) {
+        let alpha = self.set.alpha;
+        let sigma = self.sigma(axis);
+        if let Some(a) = self.axes.get_mut(axis) {
+            if a.warming(alpha) {
+                a.learn(a.last_r - prev_r, sigma, alpha);
+            }
+        }
     }
 
     /// Feed the position–velocity mismatch `u` of this GPS epoch (per NED

@@ -44,8 +44,10 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// Bumped whenever the detector's state layout changes; older snapshots are
 /// then refused with a message naming both versions. 3: the detector's
 /// fields grouped into per-stage sub-states (postcard writes fields in
-/// declaration order, so the byte layout moved).
-pub const VERSION: u32 = 3;
+/// declaration order, so the byte layout moved). 4: each indicator axis
+/// counts the epochs its σ_Δ learnt from, and the position–velocity test
+/// its two scales (fast start).
+pub const VERSION: u32 = 4;
 
 #[derive(Serialize, Deserialize)]
 struct Header<'a> {
@@ -193,16 +195,16 @@ mod tests {
         v2.extend_from_slice(body);
         let e = Detector::restore(&v2).unwrap_err().to_string();
         assert!(e.contains(&format!("version {}", VERSION + 1)) && e.contains(&format!("reads version {VERSION}")), "{e}");
-        // So is an older one (version 2: the flat layout before the stage
-        // split), before its body is parsed.
-        let older = Header { version: 2, ..h };
+        // So is an older one (version 3: the layout before the fast-start
+        // counters), before its body is parsed.
+        let older = Header { version: 3, ..h };
         let mut v_old = postcard::to_allocvec(&older).unwrap();
         v_old.extend_from_slice(body);
         let e = Detector::restore(&v_old).unwrap_err().to_string();
         assert_eq!(
             e,
             format!(
-                "snapshot: version 2 (written by navguard {}) cannot be read by navguard {}, which reads version 3",
+                "snapshot: version 3 (written by navguard {}) cannot be read by navguard {}, which reads version 4",
                 env!("CARGO_PKG_VERSION"),
                 env!("CARGO_PKG_VERSION")
             )

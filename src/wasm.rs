@@ -156,6 +156,11 @@ export interface AuditReport {
   gpsAvailable: boolean; gpsFixFraction: number; flaggedGpsEpochFraction: number;
   faults: FaultInterval[]; dataGaps: { start: number; end: number }[]; missing: string[]; warnings: string[];
   meta: [string, string][]; metrics?: Metrics; stats: DetectorStats;
+  /** Boot-clock s of the first row; show times as t - startT. startUtc: ISO 8601 UTC of the first row when the log has GPS time. */
+  startT: number; startUtc?: string;
+  /** What the receiver-quality column `eph` holds: metres, HDOP (unitless) or nothing. */
+  ephSource: "eph" | "hdop" | "none";
+  modes: { t: number; mode: string }[]; messages: { t: number; level: "error" | "warning" | "info" | "event"; text: string }[];
 }
 /** Residual columns: GPS position N/E/D (m), velocity N/E/D (m/s), baro (m); NaN on rows without that measurement. */
 export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array; rPn: Float64Array; rPe: Float64Array; rPd: Float64Array; rVn: Float64Array; rVe: Float64Array; rVd: Float64Array; rBaro: Float64Array } }

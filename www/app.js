@@ -6,6 +6,7 @@ import uPlot from './vendor/uPlot.esm.js';
 import { initLive } from './live.js';
 import { initCompare } from './compare.js';
 import { initTight } from './tight.js';
+import { verdictOf, qualityLabel, fmtUtc, fmtSince, checkedWithoutGps, robustRange, ticks } from './report-html.js';
 
 const $ = (sel) => document.querySelector(sel);
 const STAGES = ['reading', 'parsing', 'detecting', 'plotting'];
@@ -114,6 +115,11 @@ function onWorkerMessage(m) {
   }
   if (m.type === 'csv') {
     download(m.blob, `${baseName()}.per-sample.csv`);
+    return;
+  }
+  if (m.type === 'html') {
+    state.lastHtml = m.blob;
+    download(m.blob, `${baseName()}.report.html`);
     return;
   }
   if (compare && compare.onMessage(m)) return;
@@ -240,11 +246,13 @@ function render(m) {
   state.renders = (state.renders || 0) + 1;
   document.body.classList.add('has-result');
   state.selected = -1;
+  renderVerdict(m);
   renderSummary(m);
   renderTable(m.report);
   renderPlots(m, keepX);
   $('#export-json').disabled = false;
   $('#export-csv').disabled = false;
+  $('#export-html').disabled = false;
   $('#config-state').textContent = `audit ${m.auditMs.toFixed(0)} ms`;
   if (compare) compare.refresh();
 }
@@ -253,6 +261,32 @@ const fmt = (x, d = 2) => (x == null || !Number.isFinite(x) ? '—' : x.toFixed(
 const pct = (x) => (x == null || !Number.isFinite(x) ? '—' : `${(100 * x).toFixed(1)} %`);
 function esc(s) {
   return String(s).replace(/[&<>"']/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;' })[c]);
+}
+
+/** Seconds since the log's start: every time the page shows. */
+const t0Of = (m) => (m && Number.isFinite(m.report.startT) ? m.report.startT : 0);
+
+// The operator's answer first: verdict, what it rests on, when the flight was.
+function renderVerdict(m) {
+  const r = m.report;
+  const v = verdictOf(r);
+  const faults = r.faults;
+  const flagged = faults.reduce((a, f) => a + (f.end - f.start), 0);
+  const el = $('#verdict');
+  el.dataset.verdict = v;
+  el.hidden = false;
+  const head = v === 'faults' ? `${faults.length} fault interval${faults.length === 1 ? '' : 's'}, ${fmt(flagged, 1)} s flagged`
+    : v === 'clean' ? 'No navigation fault found' : 'No verdict: no GPS fix in this log';
+  const when = fmtUtc(r.startUtc) ? `started ${fmtUtc(r.startUtc)}` : 'start time unknown (no GPS time in the log)';
+  const mode = (r.modes || []).length ? ` · ${r.modes.length} flight mode${r.modes.length === 1 ? '' : 's'}` : '';
+  const alerts = (r.messages || []).filter((x) => x.level === 'error' || x.level === 'warning').length;
+  const msgs = (r.messages || []).length ? ` · ${r.messages.length} autopilot messages (${alerts} warnings/errors)` : '';
+  el.innerHTML = `<span class="verdict-badge v-${v.replace(' ', '-')}">${esc(v)}</span>` +
+    `<div class="verdict-text"><strong>${esc(head)}</strong>` +
+    `<span class="muted">${esc(m.source.name)} · ${esc(FORMAT_NAME[r.format] || r.format)} · ${fmt(r.durationS, 1)} s · ${esc(when)}${esc(mode)}${esc(msgs)}</span>` +
+    (r.gpsAvailable ? `<span class="muted">GPS ${fmt(r.gpsRateHz, 1)} Hz, ${pct(r.flaggedGpsEpochFraction)} of epochs flagged; receiver quality as ${esc(qualityLabel(r))}; times are seconds since the log's start</span>`
+      : `<span class="nogps-note">${esc(checkedWithoutGps(r))}</span>`) +
+    '</div>';
 }
 
 function renderSummary(m) {
@@ -266,13 +300,15 @@ function renderSummary(m) {
     ['Source', src.kind === 'sim' ? `simulated “${esc(src.scenario)}”, seed ${src.seed}` : esc(src.name)],
     ['Format', `${esc(FORMAT_NAME[r.format] || r.format)}${meta.get('firmware') ? ` <span class="muted">(${esc(meta.get('firmware'))})</span>` : ''}`],
     ['Samples', `${r.rows.toLocaleString('en-US')} <span class="muted">(${(src.size / 1048576).toFixed(2)} MiB)</span>`],
-    ['Duration', `${fmt(r.durationS, 1)} s <span class="muted">(t ${fmt(m.plot.tMin, 1)}–${fmt(m.plot.tMax, 1)} s)</span>`],
+    ['Start (UTC)', fmtUtc(r.startUtc) ? esc(fmtUtc(r.startUtc)) : '<span class="muted">unknown (no GPS time in the log)</span>'],
+    ['Duration', `${fmt(r.durationS, 1)} s <span class="muted">(boot clock ${fmt(m.plot.tMin, 1)}–${fmt(m.plot.tMax, 1)} s)</span>`],
+    ['Receiver quality', r.ephSource === 'hdop' ? 'HDOP <span class="muted">(unitless; no accuracy in metres in this log)</span>' : r.ephSource === 'eph' ? 'eph (m)' : '<span class="muted">not in the log</span>'],
     ['GPS rate', r.gpsEpochs ? `${fmt(r.gpsRateHz, 1)} Hz <span class="muted">(${r.gpsEpochs.toLocaleString('en-US')} epochs)</span>` : '— <span class="muted">(no GPS epochs)</span>'],
     ['IMU rate', r.imuRateHz > 0 ? `${fmt(r.imuRateHz, 1)} Hz` : '— <span class="muted">(no IMU)</span>'],
     ['GPS availability', r.gpsAvailable ? `${pct(r.gpsFixFraction)} <span class="muted">of epochs with a fix</span>` : '<span class="bad">GPS unavailable</span>'],
     ['Flagged GPS epochs', pct(r.flaggedGpsEpochFraction)],
     ['Fault intervals', `<span class="tag fault">${counts.residual} residual</span> <span class="tag outage">${counts.gps_outage} outage</span> <span class="muted">${fmt(faultTime, 1)} s total</span>`],
-    ['Data gaps', r.dataGaps.length ? r.dataGaps.map((g) => `${fmt(g.start, 1)}–${fmt(g.end, 1)} s`).join(', ') : 'none'],
+    ['Data gaps', r.dataGaps.length ? r.dataGaps.map((g) => `${fmt(g.start - t0Of(m), 1)}–${fmt(g.end - t0Of(m), 1)} s`).join(', ') : 'none'],
     ['Missing inputs', r.missing.length ? `<span class="warn">${r.missing.map(esc).join(', ')}</span>` : 'none'],
     ['Method', esc(methodOf(m))],
     ['Detector', `${r.stats.retrains} retrains, ${r.stats.filter_resets} filter resets${r.stats.filter_errors ? `, <span class="warn">${r.stats.filter_errors} filter errors</span>` : ''}`],
@@ -295,6 +331,13 @@ function renderSummary(m) {
       ['TP / FP / TN / FN', `${x.tp} / ${x.fp} / ${x.tn} / ${x.fn}`],
     ].map(([k, v]) => `<dt>${k}</dt><dd>${v}</dd>`).join('') + '</dl>';
   }
+  const t0 = t0Of(m);
+  if ((r.modes || []).length) {
+    html += `<details class="modes" open><summary>Flight modes (${r.modes.length})</summary><ul class="events">${r.modes.map((x) => `<li><span class="num">${fmtSince(x.t - t0)}</span> ${esc(x.mode)}</li>`).join('')}</ul></details>`;
+  }
+  if ((r.messages || []).length) {
+    html += `<details class="messages"><summary>Autopilot messages (${r.messages.length})</summary><ul class="events">${r.messages.map((x) => `<li class="lvl-${esc(x.level)}"><span class="num">${fmtSince(x.t - t0)}</span> <b>${esc(x.level)}</b> ${esc(x.text)}</li>`).join('')}</ul></details>`;
+  }
   if (r.meta.length) {
     html += `<details class="meta"><summary>Log metadata (${r.meta.length})</summary><dl class="kv">${r.meta.map(([k, v]) => `<dt>${esc(k)}</dt><dd>${esc(v)}</dd>`).join('')}</dl></details>`;
   }
@@ -312,8 +355,8 @@ function renderTable(report) {
   $('#fault-count').textContent = `(${report.faults.length})`;
   if (!report.faults.length) {
     tb.innerHTML = report.gpsAvailable
-      ? '<tr class="empty"><td colspan="8">No fault intervals detected.</td></tr>'
-      : '<tr class="empty"><td colspan="8"><span class="bad">GPS unavailable in this log</span>: no residual-based verdicts could be made.</td></tr>';
+      ? '<tr class="empty"><td colspan="9">No fault intervals detected.</td></tr>'
+      : `<tr class="empty"><td colspan="9"><span class="bad">No verdict: GPS unavailable in this log</span>. ${esc(checkedWithoutGps(report))}</td></tr>`;
     return;
   }
   report.faults.forEach((f, i) => {
@@ -324,8 +367,11 @@ function renderTable(report) {
     tr.dataset.end = f.end;
     tr.dataset.kind = f.kind;
     tr.className = f.kind === 'gps_outage' ? 'k-outage' : 'k-fault';
-    tr.innerHTML = `<td class="num muted">${i + 1}</td><td class="num">${fmt(f.start, 2)}</td><td class="num">${fmt(f.end, 2)}</td>` +
+    // data-start/end: boot clock (as the report); shown: since the log's start
+    const t0 = t0Of(state.result);
+    tr.innerHTML = `<td class="num muted">${i + 1}</td><td class="num">${fmt(f.start - t0, 2)}</td><td class="num">${fmt(f.end - t0, 2)}</td>` +
       `<td class="num">${fmt(f.end - f.start, 2)}</td><td><i class="sw ${f.kind === 'gps_outage' ? 'outage' : 'fault'}"></i>${FAULT_KIND_LABEL[f.kind] || esc(f.kind)}</td>` +
+      `<td>${esc(typeof f.severity === 'string' ? f.severity : '—')}</td>` +
       `<td class="num">${fmt(f.peakF, 3)}</td><td>${esc(f.driver === 'none' ? '—' : f.driver.replace(/_/g, ' '))}</td><td>${esc(f.indicator === 'none' ? '—' : f.indicator)}</td>`;
     tb.append(tr);
   });
@@ -395,9 +441,97 @@ function shadeHook(solid) {
       const x1 = u.valToPos(g.end, 'x', true);
       ctx.fillRect(x0, top, x1 - x0, height);
     }
+    drawEvents(u, m.report, solid);
     ctx.restore();
   };
 }
+
+const MODE_TINTS = ['rgba(37,99,235,0.10)', 'rgba(22,163,74,0.12)', 'rgba(234,179,8,0.16)', 'rgba(147,51,234,0.10)', 'rgba(13,148,136,0.12)'];
+
+// Flight modes as a tinted strip along the top (named on the status band)
+// and the autopilot's warnings and errors as dashed vertical lines.
+function drawEvents(u, r, named) {
+  const { ctx } = u;
+  const { left, top, width, height } = u.bbox;
+  const pr = devicePixelRatio || 1;
+  const modes = r.modes || [];
+  const strip = Math.round((named ? 14 : 5) * pr);
+  modes.forEach((md, i) => {
+    const x0 = Math.max(left, u.valToPos(md.t, 'x', true));
+    const x1 = Math.min(left + width, i + 1 < modes.length ? u.valToPos(modes[i + 1].t, 'x', true) : left + width);
+    if (x1 <= x0) return;
+    ctx.fillStyle = MODE_TINTS[i % MODE_TINTS.length].replace(/0\.\d+\)$/, named ? '0.35)' : '0.45)');
+    ctx.fillRect(x0, top, x1 - x0, strip);
+    ctx.fillStyle = 'rgba(17,24,39,0.55)';
+    ctx.fillRect(x0, top, Math.max(1, pr), named ? height : strip);
+    if (named && x1 - x0 > 30 * pr) {
+      ctx.fillStyle = '#111827';
+      ctx.font = `${10 * pr}px system-ui, sans-serif`;
+      ctx.textBaseline = 'top';
+      ctx.fillText(md.mode, x0 + 3 * pr, top + 2 * pr, x1 - x0 - 4 * pr);
+    }
+  });
+  ctx.setLineDash([3 * pr, 3 * pr]);
+  ctx.lineWidth = pr;
+  for (const msg of r.messages || []) {
+    if (msg.level !== 'error' && msg.level !== 'warning') continue;
+    const x = u.valToPos(msg.t, 'x', true);
+    if (x < left || x > left + width) continue;
+    ctx.strokeStyle = msg.level === 'error' ? 'rgba(185,28,28,0.7)' : 'rgba(126,34,206,0.6)';
+    ctx.beginPath();
+    ctx.moveTo(x, top);
+    ctx.lineTo(x, top + height);
+    ctx.stroke();
+  }
+  ctx.setLineDash([]);
+}
+
+// Scales whose range is robust (percentiles), so points may fall outside.
+const ROBUST_SCALES = new Set(['y', 'm']);
+
+// Points outside a plot's robust y range: a small triangle at the edge.
+function clipMarks(u) {
+  const { ctx } = u;
+  const { left, top, width, height } = u.bbox;
+  const pr = devicePixelRatio || 1;
+  let n = 0;
+  ctx.save();
+  for (let s = 1; s < u.series.length; s++) {
+    if (!u.series[s].show || !ROBUST_SCALES.has(u.series[s].scale)) continue;
+    const { min, max } = u.scales[u.series[s].scale];
+    const xs = u.data[0], ys = u.data[s];
+    ctx.fillStyle = u.series[s]._stroke || u.series[s].stroke || '#111';
+    for (let i = 0; i < ys.length; i++) {
+      const y = ys[i];
+      if (y == null || (y >= min && y <= max)) continue;
+      const x = u.valToPos(xs[i], 'x', true);
+      if (x < left || x > left + width) continue;
+      n++;
+      const up = y > max;
+      const e = up ? top : top + height;
+      const d = (up ? 7 : -7) * pr;
+      ctx.beginPath();
+      ctx.moveTo(x - 4 * pr, e + d);
+      ctx.lineTo(x, e);
+      ctx.lineTo(x + 4 * pr, e + d);
+      ctx.closePath();
+      ctx.fill();
+    }
+  }
+  ctx.restore();
+  u._clipped = n;
+}
+
+// Round ticks in seconds since the log's start (the data stay on the boot
+// clock, as the report's intervals are).
+const sinceSplits = (u, ai, min, max) => {
+  const t0 = t0Of(state.result);
+  return ticks(min - t0, max - t0, Math.max(3, Math.floor(u.bbox.width / (devicePixelRatio || 1) / 90))).map((v) => v + t0);
+};
+const sinceValues = (u, splits) => {
+  const t0 = t0Of(state.result);
+  return splits.map((v) => String(Math.round((v - t0) * 1000) / 1000));
+};
 
 let hatchPattern = null;
 function hatch(ctx) {
@@ -416,7 +550,9 @@ function hatch(ctx) {
 }
 
 const tAxis = (last) => ({
-  label: last ? 'time (s)' : 't (s)',
+  label: last ? "time since the log's start (s)" : 't (s)',
+  splits: sinceSplits,
+  values: sinceValues,
   labelSize: 18,
   size: 34,
   stroke: '#374151',
@@ -515,7 +651,7 @@ function renderPlots(m, keepX) {
       hooks: { drawAxes: [shadeHook(true)] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v, 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'status', scale: 'k', stroke: 'transparent', width: 0, paths: () => null, points: { show: false }, value: (u, v) => (v == null ? '—' : KIND_NAME[v]) },
     ],
     axes: [tAxis(), yAxis('status', 'k', 3, { values: () => [], ticks: { show: false }, grid: { show: false } }), spacerAxis()],
@@ -531,7 +667,7 @@ function renderPlots(m, keepX) {
       hooks: { drawAxes: [shadeHook(false)] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v, 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'F (-)', scale: 'f', stroke: COLORS.f, width: 1.5, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 3) },
       { label: method === 'anfis' ? `threshold ${thr}` : `fault at 1 (${method})`, scale: 'f', stroke: COLORS.thr, width: 1.25, dash: [6, 4], points: { show: false }, value: (u, v) => fmt(v, 2) },
     ],
@@ -549,7 +685,7 @@ function renderPlots(m, keepX) {
       hooks: { drawAxes: [shadeHook(false)] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v, 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'R (-)', scale: 'r', stroke: COLORS.r, width: 1.25, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 2) },
       { label: 'C (-)', scale: 'c', stroke: COLORS.c, width: 1.25, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 3) },
     ],
@@ -563,17 +699,18 @@ function renderPlots(m, keepX) {
     ...baseTimeOpts('GPS', 190, {
       scales: {
         n: { range: (u, lo, hi) => [0, Math.max(4, Math.ceil((hi ?? 0) + 1))] },
-        m: { range: (u, lo, hi) => [0, Math.max(2, (hi ?? 0) * 1.1)] },
+        // HDOP 99.99 ("unknown") or one wild eph must not flatten the line
+        m: { range: (u, lo, hi) => [0, Math.max(2, robustRange(u.data[3].filter((v) => v != null))[1])] },
       },
-      hooks: { drawAxes: [shadeHook(false)] },
+      hooks: { drawAxes: [shadeHook(false)], draw: [clipMarks] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v, 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       { label: 'satellites (-)', scale: 'n', stroke: COLORS.sats, width: 1.5, paths: stepped, points: { show: false }, value: (u, v) => (v == null ? '—' : String(v)) },
       { label: 'fix type (-)', scale: 'n', stroke: COLORS.fix, width: 1.5, paths: stepped, points: { show: false }, value: (u, v) => (v == null ? '—' : String(v)) },
-      { label: 'eph (m)', scale: 'm', stroke: COLORS.eph, width: 1.25, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 2) },
+      { label: qualityLabel(m.report), scale: 'm', stroke: COLORS.eph, width: 1.25, paths: stepped, points: { show: false }, value: (u, v) => fmt(v, 2) },
     ],
-    axes: [tAxis(true), yAxis('sats, fix (-)', 'n'), yAxis('eph (m)', 'm', 1, { stroke: COLORS.eph })],
+    axes: [tAxis(true), yAxis('sats, fix (-)', 'n'), yAxis(qualityLabel(m.report), 'm', 1, { stroke: COLORS.eph })],
   }, gData, $('#plot-gps'));
   $('#plot-gps').classList.toggle('nodata', !hasGq);
 
@@ -600,17 +737,26 @@ function residualPlot(host, res, axisLabel, unit, series, last) {
         y: {
           range: (u, lo, hi) => {
             if (lo == null || hi == null) return [-1, 1];
-            // at least ±0.25 of the unit, so a quiet flight does not show noise as structure
-            const a = Math.min(lo, -0.25), b = Math.max(hi, 0.25);
-            const m = (b - a) * 0.06;
-            return [a - m, b + m];
+            // robust to single spikes: percentiles of the visible samples,
+            // points beyond are marked at the edge (clipMarks); at least
+            // ±0.25 of the unit, so a quiet flight does not show noise as structure
+            const xs = u.data[0], { min: x0, max: x1 } = u.scales.x;
+            const vis = [];
+            for (let s = 1; s < u.data.length; s++) {
+              if (u.series[s] && u.series[s].show === false) continue;
+              const ys = u.data[s];
+              for (let i = 0; i < ys.length; i++) if (ys[i] != null && (x0 == null || (xs[i] >= x0 && xs[i] <= x1))) vis.push(ys[i]);
+            }
+            const [a0, b0] = vis.length ? robustRange(vis, true) : [lo, hi];
+            const a = Math.min(a0, -0.25), b = Math.max(b0, 0.25);
+            return [a, b];
           },
         },
       },
-      hooks: { drawAxes: [shadeHook(false)] },
+      hooks: { drawAxes: [shadeHook(false)], draw: [clipMarks] },
     }),
     series: [
-      { label: 't (s)', value: (u, v) => fmt(v, 2) },
+      { label: 't (s)', value: (u, v) => (v == null ? '—' : fmt(v - t0Of(state.result), 2)) },
       ...series.map(([name, color], i) => ({
         label: `${name} (${unit})`,
         scale: 'y',
@@ -756,6 +902,11 @@ function exportJson() {
   download(new Blob([JSON.stringify(out, null, 2) + '\n'], { type: 'application/json' }), `${baseName()}.report.json`);
 }
 
+function exportHtml() {
+  if (!state.result || !state.workerHasLog) return;
+  send({ type: 'html' });
+}
+
 function exportCsv() {
   if (!state.result || !state.workerHasLog) return;
   send({ type: 'csv' });
@@ -774,6 +925,16 @@ function resize() {
     renderTrack(state.result.plot);
     if (keep) updateTrackWindow(keep[0], keep[1]);
   }
+}
+
+// Operator view ("audit") or the research panels (compare, tightly
+// coupled, GAN, paper figures) on a second tab.
+function showTab(name) {
+  state.tab = name;
+  for (const b of document.querySelectorAll('.tabs [data-tab]')) b.setAttribute('aria-selected', String(b.dataset.tab === name));
+  for (const p of document.querySelectorAll('[data-tab-panel]')) p.hidden = p.dataset.tabPanel !== name;
+  // panels laid out while hidden have no width: let them size now
+  window.dispatchEvent(new Event('resize'));
 }
 
 function init() {
@@ -809,6 +970,8 @@ function init() {
   });
   $('#export-json').addEventListener('click', exportJson);
   $('#export-csv').addEventListener('click', exportCsv);
+  $('#export-html').addEventListener('click', exportHtml);
+  for (const b of document.querySelectorAll('.tabs [data-tab]')) b.addEventListener('click', () => showTab(b.dataset.tab));
   const tbody = $('#faults tbody');
   tbody.addEventListener('click', (e) => {
     const tr = e.target.closest('tr[data-index]');

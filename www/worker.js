@@ -17,6 +17,7 @@
 // tight-result, gan-progress | gan-result (see tight.js).
 // A comparison runs in slices of ~50 ms, so audit messages are served in
 // between (each job keeps its own wasm object).
+import { flightSeries, renderReport } from './report-html.js';
 import init, { Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, tightGanTrain, version } from './pkg/navguard.js';
 
 const ready = init();
@@ -82,6 +83,12 @@ self.onmessage = async (ev) => {
       if (!last) throw new Error('no audit result yet');
       const blob = perSampleCsv(last.columns);
       post({ type: 'csv', id, blob });
+      return;
+    } else if (msg.type === 'html') {
+      // The same report file as `navguard report FILE --html` (one module).
+      if (!last) throw new Error('no audit result yet');
+      const html = renderReport({ title: `navguard report: ${source.name}`, version: version(), flights: [{ name: source.name, report: last.report, series: flightSeries(log.columns, last.columns, last.report) }] });
+      post({ type: 'html', id, blob: new Blob([html], { type: 'text/html' }) });
       return;
     } else {
       throw new Error(`unknown message ${msg.type}`);

@@ -1,6 +1,7 @@
 #!/usr/bin/env node
 // navguard CLI: audit flight logs, simulate scenarios, reproduce the paper.
-//   navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]
+//   navguard audit FILE|DIR [--json] [--per-sample OUT.csv] [--html OUT.html] [--config CFG.json]
+//   navguard report FILE --html OUT.html [--config CFG.json]
 //   navguard simulate NAME [--seed N] [--out FILE.csv]
 //   navguard report [--seed N] [--json] [--quick]
 //   navguard train LABELLED.csv [...] --out MODEL.json
@@ -9,7 +10,7 @@ import { readFileSync, statSync, closeSync } from 'node:fs';
 import { Worker } from 'node:worker_threads';
 import { availableParallelism } from 'node:os';
 import { createRequire } from 'node:module';
-import { dirname, join } from 'node:path';
+import { dirname, join, relative } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { performance } from 'node:perf_hooks';
 import { perSampleHeader, perSampleRows } from '../lib/csv.mjs';
@@ -17,13 +18,15 @@ import { streamAudit } from '../lib/stream-audit.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
 import { CliError, AtomicOutput, openInput, readSmall, walkLogs, writeAtomic } from '../lib/files.mjs';
 import { parseArgs, suggest } from '../lib/args.mjs';
+import { verdictOf, faultList, flightSeries, renderReport, qualityLabel, fmtUtc, fmtSince, checkedWithoutGps } from '../lib/html-report.mjs';
 
 const require = createRequire(import.meta.url);
 const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'index.js'));
 
 const USAGE = `usage:
-  navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]
-  navguard audit DIR [--json] [--summary OUT.json] [--config CFG.json] [--jobs N]
+  navguard audit FILE [--json] [--per-sample OUT.csv] [--html OUT.html] [--config CFG.json] [--fail-on-fault]
+  navguard audit DIR [--json] [--summary OUT.json] [--html OUT.html] [--config CFG.json] [--jobs N] [--fail-on-fault]
+  navguard report FILE --html OUT.html [--config CFG.json]
   navguard simulate NAME [--seed N] [--out FILE.csv]     (names: ${ng.scenarioNames().join(', ')})
   navguard report [--seed N] [--json] [--quick]
   navguard train LABELLED.csv [...] --out MODEL.json
@@ -57,18 +60,47 @@ function toJson(value, indent) {
   }
 }
 
-/**
- * One word for a report: `faults` (at least one interval), `clean`, or
- * `no verdict` when the log has no GPS fix to judge, so a log the detector
- * could not judge is never shown as a clean flight.
- */
-function verdictOf(report) {
-  if (!report.gpsAvailable) return 'no verdict';
-  return report.faults.length > 0 ? 'faults' : 'clean';
-}
-
 /** Exit status under --fail-on-fault: 1 when any audited log has faults. */
 let faultsFound = false;
+/** Exit status 2 when any log of a folder could not be read. */
+let unreadable = false;
+
+/** A whole log read for the HTML report: its columns for the plots and the
+ * audit with per-row outputs (the report equals the streamed one). */
+function auditForHtml(file, config) {
+  const { fd } = openInput(file);
+  let bytes;
+  try { bytes = new Uint8Array(readFileSync(fd)); } finally { closeSync(fd); }
+  try {
+    const log = ng.readLog(bytes);
+    const { report, columns } = ng.auditBytes(bytes, config);
+    return { report, series: flightSeries(log.columns, columns, report) };
+  } catch (e) {
+    throw new CliError(`${file}: ${e && e.message ? e.message : e}`);
+  }
+}
+
+/** Write the HTML report of `flights` to `out` (atomically; never an input). */
+function writeHtml(out, flights, inputs, title) {
+  progress(`writing ${out}...`);
+  const html = renderReport({ title, version: ng.version(), flights });
+  writeAtomic(out, html, '--html', inputs);
+  progressDone();
+  process.stderr.write(`wrote ${out} (${(html.length / 1024).toFixed(0)} KiB, ${flights.length} log${flights.length === 1 ? '' : 's'})\n`);
+}
+
+/** `report FILE --html OUT` and `audit FILE --html OUT`. */
+function htmlReport(file, opt) {
+  const config = readConfig(opt.config);
+  const out = new AtomicOutput(opt.html, '--html', [file]);
+  out.abort(); // checked now, written by writeHtml once the audit is done
+  progress(`auditing ${file} for the HTML report...`);
+  let res;
+  try { res = auditForHtml(file, config); } finally { progressDone(); }
+  if (verdictOf(res.report) === 'faults') faultsFound = true;
+  writeHtml(opt.html, [{ name: file, ...res }], [file], `navguard report: ${file}`);
+  return res.report;
+}
 
 /** Any log streamed from disk in 4 MiB chunks (lib/stream-audit.mjs):
  * memory stays bounded whatever the file's size and format; the per-sample
@@ -111,6 +143,7 @@ function audit(file, opt) {
     progressDone();
   }
   const { report } = res;
+  if (opt.html) htmlReport(file, opt);
   const verdict = verdictOf(report);
   if (verdict === 'faults') faultsFound = true;
   const out = { file, verdict, ...report };
@@ -119,15 +152,24 @@ function audit(file, opt) {
     return;
   }
   const L = [];
+  const t0 = Number.isFinite(report.startT) ? report.startT : 0;
+  const faults = faultList(report);
   L.push(`${file}: ${report.format}, ${report.rows} rows, ${report.durationS.toFixed(1)} s: ${verdict}`);
-  L.push(`  GPS: ${report.gpsAvailable ? `${report.gpsEpochs} epochs at ${report.gpsRateHz.toFixed(1)} Hz, fix in ${(100 * report.gpsFixFraction).toFixed(1)}% of reports` : 'unavailable'}; IMU ${report.imuRateHz.toFixed(1)} Hz`);
+  L.push(`  start: ${fmtUtc(report.startUtc) || 'UTC unknown (no GPS time in the log)'}; times below are seconds since the log's start (boot clock ${t0.toFixed(3)} s)`);
+  L.push(`  GPS: ${report.gpsAvailable ? `${report.gpsEpochs} epochs at ${report.gpsRateHz.toFixed(1)} Hz, fix in ${(100 * report.gpsFixFraction).toFixed(1)}% of reports, receiver quality as ${qualityLabel(report)}` : 'unavailable'}; IMU ${report.imuRateHz.toFixed(1)} Hz`);
   if (report.missing.length) L.push(`  missing inputs: ${report.missing.join(', ')}`);
-  L.push(report.gpsAvailable ? `  flagged GPS epochs: ${(100 * report.flaggedGpsEpochFraction).toFixed(2)}%` : '  flagged GPS epochs: none to judge (no GPS fix in the log)');
-  L.push(`  fault intervals: ${report.faults.length}`);
-  for (const f of report.faults.slice(0, 20)) {
-    L.push(`    ${f.start.toFixed(2).padStart(9)} - ${f.end.toFixed(2).padStart(9)} s  ${f.kind.padEnd(10)} peak F ${f.peakF.toFixed(2)}  driver ${f.driver} (${f.indicator})`);
+  L.push(report.gpsAvailable ? `  flagged GPS epochs: ${(100 * report.flaggedGpsEpochFraction).toFixed(2)}%` : `  flagged GPS epochs: none to judge (no GPS fix in the log)\n  ${checkedWithoutGps(report)}`);
+  L.push(`  fault intervals: ${faults.length}`);
+  for (const f of faults.slice(0, 20)) {
+    const sev = typeof f.severity === 'string' ? `  ${f.severity}` : '';
+    const off = Number.isFinite(f.peakOffset) ? `  peak offset ${f.peakOffset.toFixed(1)} ${f.offsetUnit || ''}` : '';
+    L.push(`    ${(f.start - t0).toFixed(2).padStart(9)} - ${(f.end - t0).toFixed(2).padStart(9)} s  ${f.kind.padEnd(10)}${sev}${off}  peak F ${f.peakF.toFixed(2)}  driver ${f.driver} (${f.indicator})`);
   }
-  if (report.faults.length > 20) L.push(`    ... ${report.faults.length - 20} more (use --json)`);
+  if (faults.length > 20) L.push(`    ... ${faults.length - 20} more (use --json)`);
+  if ((report.modes || []).length) L.push(`  flight modes: ${report.modes.slice(0, 12).map((m) => `${fmtSince(m.t - t0)} ${m.mode}`).join(', ')}${report.modes.length > 12 ? `, ... (${report.modes.length} in all)` : ''}`);
+  const alerts = (report.messages || []).filter((m) => m.level === 'error' || m.level === 'warning');
+  if ((report.messages || []).length) L.push(`  autopilot messages: ${report.messages.length} (${alerts.length} warnings or errors)`);
+  for (const m of alerts.slice(0, 10)) L.push(`    ${fmtSince(m.t - t0).padStart(9)}  ${m.level}: ${m.text}`);
   for (const w of report.warnings) L.push(`  warning: ${w}`);
   if (report.metrics) {
     const m = report.metrics;
@@ -144,6 +186,8 @@ async function auditDir(dir, opt) {
   const config = readConfig(opt.config);
   // Checked before the audit starts, so a bad path costs nothing.
   const summaryOut = opt.summary ? new AtomicOutput(opt.summary, '--summary', files) : null;
+  if (opt.html) new AtomicOutput(opt.html, '--html', files).abort();
+  const series = !!opt.html;
   const jobs = Math.max(1, Math.min(opt.jobs ?? availableParallelism(), files.length));
   const results = [];
   let next = 0, done = 0;
@@ -151,7 +195,7 @@ async function auditDir(dir, opt) {
   await new Promise((resolve) => {
     const workers = Array.from({ length: jobs }, () => new Worker(new URL('../lib/audit-worker.mjs', import.meta.url)));
     const feed = (w) => {
-      if (next < files.length) w.postMessage({ file: files[next++], config });
+      if (next < files.length) w.postMessage({ file: files[next++], config, series });
       else w.terminate();
     };
     for (const w of workers) {
@@ -170,22 +214,31 @@ async function auditDir(dir, opt) {
   results.sort((a, b) => a.file.localeCompare(b.file));
   const rows = results.map((r) => r.error ? { file: r.file, verdict: 'unreadable', error: r.error } : {
     file: r.file, verdict: verdictOf(r.report), format: r.report.format, durationS: r.report.durationS, gpsAvailable: r.report.gpsAvailable,
+    startT: r.report.startT, startUtc: r.report.startUtc ?? null, ephSource: r.report.ephSource,
     gpsRateHz: r.report.gpsRateHz, flaggedGpsEpochFraction: r.report.flaggedGpsEpochFraction,
-    residualFaults: r.report.faults.filter((f) => f.kind === 'residual').length,
-    outages: r.report.faults.filter((f) => f.kind === 'gps_outage').length,
-    dataGaps: r.report.dataGaps.length, warnings: r.report.warnings, missing: r.report.missing, ms: r.ms,
+    residualFaults: faultList(r.report).filter((f) => f.kind === 'residual').length,
+    outages: faultList(r.report).filter((f) => f.kind === 'gps_outage').length,
+    dataGaps: r.report.dataGaps.length, warnings: r.report.warnings, missing: r.report.missing,
+    // Every interval (boot-clock s, as in the single-file report), not only counts.
+    faults: faultList(r.report), ms: r.ms,
   });
   if (rows.some((r) => r.verdict === 'faults')) faultsFound = true;
+  if (rows.some((r) => r.error)) unreadable = true;
+  if (opt.html) {
+    const name = (f) => relative(dir, f) || f;
+    const flights = results.map((r) => (r.error ? { name: name(r.file), error: r.error } : { name: name(r.file), report: r.report, series: r.series }));
+    writeHtml(opt.html, flights, files, `navguard fleet report: ${dir}`);
+  }
   const summary = { dir, files: files.length, failed: rows.filter((r) => r.error).length, skipped, wallMs: performance.now() - t0, jobs, logs: rows };
   const json = toJson(summary, 2);
   if (summaryOut !== null) { summaryOut.write(json + '\n'); summaryOut.commit(); }
   if (opt.json) { writeOut(json + '\n'); return; }
   const L = [`${dir}: ${files.length} logs, ${summary.failed} unreadable, ${skipped.length} other files skipped, ${jobs} workers, ${(summary.wallMs / 1000).toFixed(2)} s`];
-  L.push('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps  verdict');
+  L.push('  file                                              format     dur s  GPS Hz  flagged  faults outages gaps  verdict     start (UTC)');
   for (const r of rows) {
     const name = r.file.length > 48 ? '...' + r.file.slice(-45) : r.file;
     if (r.error) { L.push(`  ${name.padEnd(48)}  unreadable: ${r.error}`); continue; }
-    L.push(`  ${name.padEnd(48)}  ${r.format.padEnd(9)} ${r.durationS.toFixed(1).padStart(6)} ${r.gpsAvailable ? r.gpsRateHz.toFixed(1).padStart(6) : '    no'}  ${r.gpsAvailable ? (100 * r.flaggedGpsEpochFraction).toFixed(2).padStart(6) + '%' : '      -'}  ${String(r.residualFaults).padStart(5)} ${String(r.outages).padStart(7)} ${String(r.dataGaps).padStart(4)}  ${r.verdict}`);
+    L.push(`  ${name.padEnd(48)}  ${r.format.padEnd(9)} ${r.durationS.toFixed(1).padStart(6)} ${r.gpsAvailable ? r.gpsRateHz.toFixed(1).padStart(6) : '    no'}  ${r.gpsAvailable ? (100 * r.flaggedGpsEpochFraction).toFixed(2).padStart(6) + '%' : '      -'}  ${String(r.residualFaults).padStart(5)} ${String(r.outages).padStart(7)} ${String(r.dataGaps).padStart(4)}  ${r.verdict.padEnd(10)}  ${fmtUtc(r.startUtc) || '-'}`);
   }
   writeOut(L.join('\n') + '\n');
 }
@@ -238,9 +291,9 @@ function compare(opt) {
 /** Each command's flags (name -> value kind, see lib/args.mjs) and help. */
 const COMMANDS = {
   audit: {
-    flags: { json: 'bool', 'per-sample': 'path', config: 'path', summary: 'path', jobs: 'count', 'fail-on-fault': 'bool' },
-    help: `navguard audit FILE [--json] [--per-sample OUT.csv] [--config CFG.json]
-navguard audit DIR [--json] [--summary OUT.json] [--config CFG.json] [--jobs N]
+    flags: { json: 'bool', 'per-sample': 'path', config: 'path', summary: 'path', jobs: 'count', 'fail-on-fault': 'bool', html: 'path' },
+    help: `navguard audit FILE [--json] [--per-sample OUT.csv] [--html OUT.html] [--config CFG.json] [--fail-on-fault]
+navguard audit DIR [--json] [--summary OUT.json] [--html OUT.html] [--config CFG.json] [--jobs N] [--fail-on-fault]
 
 Audit a flight log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised by
 content) or every log under a folder (recursively, following links).
@@ -248,12 +301,16 @@ content) or every log under a folder (recursively, following links).
   --per-sample FILE  one line per input row: t,status,f,r,c,kind,residuals
                      (written atomically; never the input file)
   --config FILE      detector configuration (JSON object)
-  --summary FILE     (DIR) the fleet summary as JSON
+  --html FILE        a self-contained HTML report (one flight, or the fleet
+                     with one section per log); written atomically
+  --summary FILE     (DIR) the fleet summary as JSON, every interval listed
   --jobs N           (DIR) parallel workers (default: the number of cores)
   --fail-on-fault    exit 1 when a fault interval was found (for scripts)
 Each log gets a verdict: faults, clean, or "no verdict" (no GPS fix to judge).
-Exit status: 0 when the log was read (1 with --fail-on-fault and faults
-found), 2 when it could not be.`,
+Times in tables are seconds since the log's start (JSON: boot clock, with
+startT and startUtc). Progress goes to stderr on a terminal only.
+Exit status: 0 when every log was read (1 with --fail-on-fault and faults
+found), 2 when a log could not be read.`,
   },
   simulate: {
     flags: { seed: 'seed', out: 'path' },
@@ -263,10 +320,14 @@ Simulate a built-in scenario into navlog CSV (stdout, or FILE written atomically
 Names: ${ng.scenarioNames().join(', ')}`,
   },
   report: {
-    flags: { seed: 'seed', json: 'bool', quick: 'bool' },
-    help: `navguard report [--seed N] [--json] [--quick]
+    flags: { seed: 'seed', json: 'bool', quick: 'bool', html: 'path', config: 'path', 'fail-on-fault': 'bool' },
+    help: `navguard report FILE --html OUT.html [--config CFG.json] [--fail-on-fault]
+navguard report [--seed N] [--json] [--quick]
 
-The paper scenario's TC sweep, the fault kinds and the clean flights.`,
+With FILE: a self-contained HTML report of one flight log (verdict, fault
+intervals, plots, track, receiver quality, flight modes and autopilot
+messages), written atomically to OUT.html; it never overwrites the log.
+Without: the paper scenario's TC sweep, the fault kinds and the clean flights.`,
   },
   train: {
     flags: { out: 'path', config: 'path' },
@@ -312,7 +373,14 @@ function run(cmd, pos, opt) {
       return;
     }
     case 'report': {
-      if (pos.length) throw new CliError(`report takes no file; see 'navguard report --help'`);
+      if (pos.length > 1) throw new CliError(`report takes one FILE; see 'navguard report --help'`);
+      if (pos.length === 1) {
+        if (!opt.html) throw new CliError(`report FILE needs --html OUT.html; see 'navguard report --help'`);
+        for (const k of ['seed', 'json', 'quick']) if (k in opt) throw new CliError(`report: --${k} applies to the paper report, not to a FILE`);
+        htmlReport(pos[0], opt);
+        return;
+      }
+      for (const k of ['html', 'config', 'fail-on-fault']) if (k in opt) throw new CliError(`report: --${k} needs a FILE; see 'navguard report --help'`);
       const seed = opt.seed ?? 1;
       const sweep = tcSweep(ng, seed, progress);
       const kinds = opt.quick ? null : faultKinds(ng, [1, 2, 3], progress);
@@ -360,7 +428,8 @@ async function main() {
   if (opt.help) { writeOut(COMMANDS[cmd].help + '\n'); return; }
   if (opt.version) { writeOut(VERSION + '\n'); return; }
   await run(cmd, pos, opt);
-  if (opt['fail-on-fault'] && faultsFound) process.exitCode = 1;
+  if (unreadable) process.exitCode = 2;
+  else if (opt['fail-on-fault'] && faultsFound) process.exitCode = 1;
 }
 
 main().catch((e) => {

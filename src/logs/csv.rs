@@ -25,6 +25,14 @@ impl CsvReader {
         Self::default()
     }
 
+    /// What the log says beside its rows: a navlog CSV's `eph` column is the
+    /// receiver's accuracy in metres (contract §1); no modes, messages or UTC.
+    pub fn extras(&self) -> super::extras::Extras {
+        let eph = crate::sample::COLUMNS.iter().position(|c| *c == "eph");
+        let has_eph = self.map.as_ref().is_some_and(|m| m.iter().any(|c| c.is_some() && *c == eph));
+        super::extras::Extras { eph_source: if has_eph { super::extras::EphSource::Eph } else { super::extras::EphSource::None }, ..Default::default() }
+    }
+
     /// Header columns known so far (after the header line was read).
     pub fn has_header(&self) -> bool {
         self.map.is_some()
@@ -163,7 +171,8 @@ pub fn read_csv(bytes: &[u8]) -> Result<LogData, String> {
         missing.push("baro".to_string());
     }
     let meta = r.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
-    Ok(LogData { format: "csv", samples: rows, meta, warnings: r.warnings, missing, topic_counts: vec![] })
+    let extras = r.extras();
+    Ok(LogData { format: "csv", samples: rows, meta, warnings: r.warnings, missing, topic_counts: vec![], extras })
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]

@@ -63,6 +63,7 @@
 
 use std::collections::BTreeMap;
 
+use crate::logs::extras::{gps_to_unix, EphSource, Extras};
 use crate::logs::{LogData, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::sample::Sample;
 
@@ -252,6 +253,9 @@ impl DataflashStream {
             Kind::Att => self.out.on_att(layout, msg, sink),
             Kind::Baro => self.out.on_baro(layout, msg, sink),
             Kind::Msg => self.out.on_msg(layout, msg),
+            Kind::Mode => self.out.on_mode(layout, msg),
+            Kind::Err => self.out.on_err(layout, msg),
+            Kind::Ev => self.out.on_ev(layout, msg),
             Kind::Other => {}
         }
         self.pos = end;
@@ -324,6 +328,9 @@ enum Kind {
     Att,
     Baro,
     Msg,
+    Mode,
+    Err,
+    Ev,
     Other,
 }
 
@@ -337,6 +344,9 @@ fn kind_of(name: &str) -> Kind {
         "ATT" => Kind::Att,
         "BARO" => Kind::Baro,
         "MSG" => Kind::Msg,
+        "MODE" => Kind::Mode,
+        "ERR" => Kind::Err,
+        "EV" => Kind::Ev,
         _ => Kind::Other,
     }
 }
@@ -351,6 +361,14 @@ const GPS_HDOP: usize = 5;
 const GPS_SPD: usize = 6;
 const GPS_GCRS: usize = 7;
 const GPS_VZ: usize = 8;
+/// GPS time: week and ms of week (`GWk`/`GMS`; old logs `Week`/`TimeMS`,
+/// their boot clock being `T`).
+const GPS_WEEK: usize = 9;
+const GPS_MS: usize = 10;
+const MODE_MODE: usize = 0;
+const ERR_SUBSYS: usize = 0;
+const ERR_ECODE: usize = 1;
+const EV_ID: usize = 0;
 const GPA_HACC: usize = 0;
 const GPA_VACC: usize = 1;
 const GPA_VV: usize = 2;
@@ -363,7 +381,7 @@ const BARO_ALT: usize = 0;
 const MSG_TEXT: usize = 0;
 const FMTU_TYPE: usize = 0;
 const FMTU_MULTS: usize = 1;
-const MAX_ROLES: usize = 9;
+const MAX_ROLES: usize = 11;
 
 /// Column names (with accepted alternatives) of each role, in role order.
 fn role_names(kind: Kind) -> &'static [&'static [&'static str]] {
@@ -378,6 +396,8 @@ fn role_names(kind: Kind) -> &'static [&'static [&'static str]] {
             &["Spd"],
             &["GCrs"],
             &["VZ"],
+            &["GWk", "Week"],
+            &["GMS", "TimeMS"],
         ],
         Kind::Gpa => &[&["HAcc"], &["VAcc"], &["VV"]],
         Kind::Imu => &[
@@ -391,6 +411,9 @@ fn role_names(kind: Kind) -> &'static [&'static [&'static str]] {
         Kind::Att => &[&["Roll"], &["Pitch"], &["Yaw"]],
         Kind::Baro => &[&["Alt"]],
         Kind::Msg => &[&["Message"]],
+        Kind::Mode => &[&["Mode"]],
+        Kind::Err => &[&["Subsys"], &["ECode"]],
+        Kind::Ev => &[&["Id"]],
         Kind::Fmtu => &[&["FmtType"], &["MultIds"]],
         Kind::Fmt | Kind::Other => &[],
     }
@@ -756,6 +779,10 @@ struct Out {
     used_us: bool,
     used_ms: bool,
     firmware: Option<String>,
+    /// Modes, messages, UTC time; GPS rows whose eph is HDOP / GPA HAcc.
+    extras: Extras,
+    eph_hdop: u64,
+    eph_hacc: u64,
     warnings: Vec<String>,
     suppressed: usize,
     skipped: usize,
@@ -904,6 +931,11 @@ impl Out {
             let hdop = l.num(msg, GPS_HDOP);
             if hdop > 0.0 {
                 s.eph = hdop; // HDop x 1 m user range error, see module doc
+                self.eph_hdop += 1;
+            }
+            let (week, ms) = (l.num(msg, GPS_WEEK), l.num(msg, GPS_MS));
+            if week > 0.0 && ms >= 0.0 && (status.is_nan() || status >= 3.0) {
+                self.extras.utc(t, gps_to_unix(week, ms));
             }
         }
         self.flush_gps(sink);
@@ -932,6 +964,7 @@ impl Out {
         let (hacc, vacc) = (l.num(msg, GPA_HACC), l.num(msg, GPA_VACC));
         if hacc > 0.0 {
             s.eph = hacc;
+            self.eph_hacc += 1;
         }
         if vacc > 0.0 {
             s.epv = vacc;
@@ -987,16 +1020,69 @@ impl Out {
     }
 
     fn on_msg(&mut self, l: &Layout, msg: &[u8]) {
-        if self.firmware.is_some() {
-            return;
-        }
         let Some(f) = l.role(MSG_TEXT) else { return };
         let Some(text) = read_str(msg, f.off, f.ch) else {
             return;
         };
-        if vehicle_type(&text).is_some() {
+        let t = self.stamp(l, msg);
+        self.extras.message(t, "info", &text);
+        if self.firmware.is_none() && vehicle_type(&text).is_some() {
             self.firmware = Some(text.trim().to_string());
         }
+    }
+
+    /// Boot time (s) of a message that is not a sensor row (a mode, a text):
+    /// its own time column, else the preceding message's boot time (old
+    /// logs write MODE, MSG, ERR and EV without one), else NaN (before any
+    /// time is known: put at the log's start by `finish`). Leaves the
+    /// time-base bookkeeping of sensor rows alone.
+    fn stamp(&self, l: &Layout, msg: &[u8]) -> f64 {
+        l.time
+            .and_then(|(f, per_s)| read_num(msg, f.off, f.ch).map(|v| v / per_s))
+            .filter(|t| t.is_finite())
+            .or(self.last_boot_t)
+            .unwrap_or(f64::NAN)
+    }
+
+    /// `MODE`: the mode by name (a number in the vehicle's mode table).
+    fn on_mode(&mut self, l: &Layout, msg: &[u8]) {
+        let Some(f) = l.role(MODE_MODE) else { return };
+        let name = match read_str(msg, f.off, f.ch) {
+            Some(text) => text.trim().to_string(),
+            None => {
+                let n = f.num(msg);
+                if !n.is_finite() {
+                    return;
+                }
+                let vehicle = self.firmware.as_deref().and_then(vehicle_type);
+                mode_name(vehicle, n).map_or_else(|| format!("mode {n}"), str::to_string)
+            }
+        };
+        let t = self.stamp(l, msg);
+        self.extras.mode(t, name);
+    }
+
+    /// `ERR`: subsystem and error code (0 = the error cleared).
+    fn on_err(&mut self, l: &Layout, msg: &[u8]) {
+        let (sub, code) = (l.num(msg, ERR_SUBSYS), l.num(msg, ERR_ECODE));
+        if !sub.is_finite() || !code.is_finite() {
+            return;
+        }
+        let name = err_subsystem(sub).map_or_else(|| format!("subsystem {sub}"), str::to_string);
+        let (level, text) = if code == 0.0 { ("info", format!("ERR {name}: cleared")) } else { ("error", format!("ERR {name}: code {code}")) };
+        let t = self.stamp(l, msg);
+        self.extras.message(t, level, &text);
+    }
+
+    /// `EV`: an event by name (arming, landing, ...).
+    fn on_ev(&mut self, l: &Layout, msg: &[u8]) {
+        let id = l.num(msg, EV_ID);
+        if !id.is_finite() {
+            return;
+        }
+        let text = event_name(id).map_or_else(|| format!("event {id}"), str::to_string);
+        let t = self.stamp(l, msg);
+        self.extras.message(t, "event", &text);
     }
 
     fn finish(mut self, types: &[Option<Layout>], n_bytes: u64, sink: &mut dyn RowSink) -> Result<LogSummary, String> {
@@ -1072,14 +1158,129 @@ impl Out {
         if self.emit.late > 0 {
             self.warnings.push(format!("{} rows dropped: more than {REORDER_ROWS} rows out of time order", self.emit.late));
         }
+        let mut extras = self.extras;
+        // Messages before any boot time: at the log's start.
+        for m in &mut extras.messages {
+            if m.t.is_nan() {
+                m.t = t0;
+            }
+        }
+        for m in &mut extras.modes {
+            if m.t.is_nan() {
+                m.t = t0;
+            }
+        }
+        extras.sort();
+        extras.eph_source = match (self.eph_hdop, self.eph_hacc) {
+            (0, 0) => EphSource::None,
+            // Most fixes carry GPA's accuracy in metres.
+            (h, a) if 2 * a >= h => EphSource::Eph,
+            _ => EphSource::Hdop,
+        };
         Ok(LogSummary {
             format: "dataflash",
             meta,
             warnings: self.warnings,
             missing,
             topic_counts: self.counts_by_name.into_iter().collect(),
+            extras,
         })
     }
+}
+
+/// A mode number's name in the vehicle's table (ArduPilot's `mode.h`,
+/// `Plane::Mode::Number`, `Rover::Mode::Number`).
+fn mode_name(vehicle: Option<&str>, n: f64) -> Option<&'static str> {
+    const COPTER: [&str; 28] = [
+        "STABILIZE", "ACRO", "ALT_HOLD", "AUTO", "GUIDED", "LOITER", "RTL", "CIRCLE", "", "LAND", "", "DRIFT", "", "SPORT",
+        "FLIP", "AUTOTUNE", "POSHOLD", "BRAKE", "THROW", "AVOID_ADSB", "GUIDED_NOGPS", "SMART_RTL", "FLOWHOLD", "FOLLOW",
+        "ZIGZAG", "SYSTEMID", "AUTOROTATE", "AUTO_RTL",
+    ];
+    const PLANE: [&str; 26] = [
+        "MANUAL", "CIRCLE", "STABILIZE", "TRAINING", "ACRO", "FBWA", "FBWB", "CRUISE", "AUTOTUNE", "", "AUTO", "RTL",
+        "LOITER", "TAKEOFF", "AVOID_ADSB", "GUIDED", "", "QSTABILIZE", "QHOVER", "QLOITER", "QLAND", "QRTL", "QAUTOTUNE",
+        "QACRO", "THERMAL", "LOITER_ALT_QLAND",
+    ];
+    const ROVER: [&str; 16] = [
+        "MANUAL", "ACRO", "", "STEERING", "HOLD", "LOITER", "FOLLOW", "SIMPLE", "DOCK", "CIRCLE", "AUTO", "RTL", "SMART_RTL",
+        "", "", "GUIDED",
+    ];
+    let table: &[&'static str] = match vehicle {
+        Some("copter") => &COPTER,
+        Some("plane") => &PLANE,
+        Some("rover") => &ROVER,
+        _ => return None,
+    };
+    if n.fract() != 0.0 || n < 0.0 {
+        return None;
+    }
+    table.get(n as usize).copied().filter(|s| !s.is_empty())
+}
+
+/// ArduPilot's `LogErrorSubsystem` names.
+fn err_subsystem(n: f64) -> Option<&'static str> {
+    const NAMES: [&str; 30] = [
+        "", "MAIN", "RADIO", "COMPASS", "OPTFLOW", "FAILSAFE_RADIO", "FAILSAFE_BATT", "FAILSAFE_GPS", "FAILSAFE_GCS",
+        "FAILSAFE_FENCE", "FLIGHT_MODE", "GPS", "CRASH_CHECK", "FLIP", "AUTOTUNE", "PARACHUTES", "EKFCHECK",
+        "FAILSAFE_EKFINAV", "BARO", "CPU", "FAILSAFE_ADSB", "TERRAIN", "NAVIGATION", "FAILSAFE_TERRAIN", "EKF_PRIMARY",
+        "THRUST_LOSS_CHECK", "FAILSAFE_SENSORS", "FAILSAFE_LEAK", "PILOT_INPUT", "FAILSAFE_VIBE",
+    ];
+    if n.fract() != 0.0 || n < 0.0 {
+        return None;
+    }
+    NAMES.get(n as usize).copied().filter(|s| !s.is_empty())
+}
+
+/// ArduPilot's `LogEvent` names (the common ones).
+fn event_name(n: f64) -> Option<&'static str> {
+    Some(match n as i64 {
+        _ if n.fract() != 0.0 => return None,
+        10 => "ARMED",
+        11 => "DISARMED",
+        15 => "AUTO_ARMED",
+        17 => "LAND_COMPLETE_MAYBE",
+        18 => "LAND_COMPLETE",
+        19 => "LOST_GPS",
+        21 => "FLIP_START",
+        22 => "FLIP_END",
+        25 => "SET_HOME",
+        26 => "SET_SIMPLE_ON",
+        27 => "SET_SIMPLE_OFF",
+        28 => "NOT_LANDED",
+        29 => "SET_SUPERSIMPLE_ON",
+        30 => "AUTOTUNE_INITIALISED",
+        31 => "AUTOTUNE_OFF",
+        32 => "AUTOTUNE_RESTART",
+        33 => "AUTOTUNE_SUCCESS",
+        34 => "AUTOTUNE_FAILED",
+        35 => "AUTOTUNE_REACHED_LIMIT",
+        36 => "AUTOTUNE_PILOT_TESTING",
+        37 => "AUTOTUNE_SAVEDGAINS",
+        38 => "SAVE_TRIM",
+        39 => "SAVEWP_ADD_WP",
+        41 => "FENCE_ENABLE",
+        42 => "FENCE_DISABLE",
+        43 => "ACRO_TRAINER_OFF",
+        44 => "ACRO_TRAINER_LEVELING",
+        45 => "ACRO_TRAINER_LIMITED",
+        46 => "GRIPPER_GRAB",
+        47 => "GRIPPER_RELEASE",
+        49 => "PARACHUTE_DISABLED",
+        50 => "PARACHUTE_ENABLED",
+        51 => "PARACHUTE_RELEASED",
+        52 => "LANDING_GEAR_DEPLOYED",
+        53 => "LANDING_GEAR_RETRACTED",
+        54 => "MOTORS_EMERGENCY_STOPPED",
+        55 => "MOTORS_EMERGENCY_STOP_CLEARED",
+        56 => "MOTORS_INTERLOCK_DISABLED",
+        57 => "MOTORS_INTERLOCK_ENABLED",
+        58 => "ROTOR_RUNUP_COMPLETE",
+        59 => "ROTOR_SPEED_BELOW_CRITICAL",
+        60 => "EKF_ALT_RESET",
+        61 => "LAND_CANCELLED_BY_PILOT",
+        62 => "EKF_YAW_RESET",
+        _ => return None,
+    })
 }
 
 /// Vehicle type from a firmware banner such as "ArduCopter V3.3-dev (c3349c61)".
@@ -1175,6 +1376,47 @@ mod tests {
 
     fn loiter() -> LogData {
         read_dataflash(LOITER).expect("Loiter_RTL.bin parses")
+    }
+
+    /// Loiter_RTL.bin (no GPA): eph is HDOP; UTC from the first fix (GPS
+    /// week 1817, 403369800 ms at boot 20.674 s, pymavlink), 16 leap
+    /// seconds; the MODE numbers as copter modes; MSG, ERR and EV listed.
+    #[test]
+    fn loiter_extras() {
+        use crate::logs::extras::{iso_utc, EphSource};
+        let d = loiter();
+        let x = &d.extras;
+        assert_eq!(x.eph_source, EphSource::Hdop);
+        let t0 = d.samples[0].t;
+        assert_eq!(t0, 20.664);
+        assert_eq!(iso_utc(x.utc_at_boot.unwrap() + t0), "2014-11-06T16:02:33.790Z");
+        let modes: Vec<(f64, &str)> = x.modes.iter().map(|m| (m.t, m.mode.as_str())).collect();
+        assert_eq!(
+            modes,
+            [(20.664, "ALT_HOLD"), (41.074, "LOITER"), (44.644, "LAND"), (51.564, "ALT_HOLD"), (96.008, "LOITER"), (101.99, "LAND"), (114.79, "ALT_HOLD"), (126.389, "LOITER"), (227.23, "RTL")]
+        );
+        // 2 MSG + 5 ERR + 137 EV (pymavlink's counts).
+        assert_eq!(x.messages.len(), 144);
+        assert_eq!(x.messages[0].text, "ArduCopter V3.3-dev (c3349c61)");
+        assert_eq!(x.messages.iter().filter(|m| m.text.starts_with("ERR ")).count(), 5);
+        assert_eq!(x.messages.iter().filter(|m| m.level == "event").count(), 137);
+        assert!(x.messages.iter().any(|m| m.level == "error" && m.text == "ERR CRASH_CHECK: code 1"));
+        assert!(x.messages.windows(2).all(|w| w[0].t <= w[1].t));
+    }
+
+    /// The plane log's MODE numbers are plane modes; the newer truncated
+    /// plane log has GPA, so its eph is metres.
+    #[test]
+    fn plane_modes_and_gpa_eph() {
+        use crate::logs::extras::EphSource;
+        let b = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/ardupilot/erle_plane_4-12-2014_329.BIN")).unwrap();
+        let d = read_dataflash(&b).unwrap();
+        let names: Vec<&str> = d.extras.modes.iter().map(|m| m.mode.as_str()).collect();
+        assert_eq!(names, ["MANUAL", "CIRCLE", "MANUAL", "FBWA", "RTL", "MANUAL", "FBWA", "FBWB", "FBWA"]);
+        assert_eq!(d.extras.eph_source, EphSource::Hdop);
+        let t = read_dataflash(PLANE).unwrap();
+        assert_eq!(t.extras.eph_source, EphSource::Eph);
+        assert_eq!(t.extras.modes.iter().map(|m| m.mode.as_str()).collect::<Vec<_>>(), ["MANUAL"]);
     }
 
     // ---- Euler -> quaternion -------------------------------------------

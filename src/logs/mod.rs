@@ -15,6 +15,7 @@ use crate::sample::Sample;
 
 pub mod csv;
 pub mod dataflash;
+pub mod extras;
 pub mod ulog;
 
 /// What a reader made of a log.
@@ -32,6 +33,8 @@ pub struct LogData {
     pub missing: Vec<String>,
     /// Message counts per topic or message type (ULog: "topic" or "topic/multi_id").
     pub topic_counts: Vec<(String, u64)>,
+    /// Receiver-quality kind, UTC time, flight modes, autopilot messages.
+    pub extras: extras::Extras,
 }
 
 /// Everything a streaming reader reports at the end: a [`LogData`] without
@@ -43,12 +46,13 @@ pub struct LogSummary {
     pub warnings: Vec<String>,
     pub missing: Vec<String>,
     pub topic_counts: Vec<(String, u64)>,
+    pub extras: extras::Extras,
 }
 
 impl LogSummary {
     fn with_rows(self, samples: Vec<Sample>) -> LogData {
-        let LogSummary { format, meta, warnings, missing, topic_counts } = self;
-        LogData { format, samples, meta, warnings, missing, topic_counts }
+        let LogSummary { format, meta, warnings, missing, topic_counts, extras } = self;
+        LogData { format, samples, meta, warnings, missing, topic_counts, extras }
     }
 }
 

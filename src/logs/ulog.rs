@@ -58,6 +58,7 @@
 use std::collections::HashMap;
 use std::rc::Rc;
 
+use super::extras::{EphSource, Extras};
 use super::{LogData, LogSummary, NoRows, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::sample::Sample;
 
@@ -690,6 +691,8 @@ struct GpsMap {
     epv: Option<Loc>,
     sats: Option<Loc>,
     fix: Option<Loc>,
+    /// `time_utc_usec`: UTC of the fix, µs since 1970 (0 when unknown).
+    utc: Option<Loc>,
 }
 
 impl GpsMap {
@@ -711,6 +714,7 @@ impl GpsMap {
             epv: l.loc1("epv"),
             sats: l.loc1("satellites_used"),
             fix: l.loc1("fix_type"),
+            utc: l.loc1("time_utc_usec"),
         }
     }
 
@@ -782,6 +786,8 @@ enum Role {
     Att([Option<Loc>; 4]),
     /// Barometric altitude, m.
     Baro(BaroSrc, Loc),
+    /// `vehicle_status.nav_state`: the flight mode.
+    Status(Loc),
 }
 
 /// Role of a topic's `multi_id` 0 instance (other instances are counted only).
@@ -803,6 +809,7 @@ fn role_for(name: &str, l: &Layout) -> Role {
             Some(loc) => Role::Baro(BaroSrc::SensorBaro, loc),
             None => Role::Other,
         },
+        "vehicle_status" => l.loc1("nav_state").map_or(Role::Other, Role::Status),
         _ => Role::Other,
     }
 }
@@ -826,6 +833,13 @@ const NO_SUB: u32 = u32::MAX;
 /// Bound on subscription entries (real logs: a few hundred); only reachable
 /// by a file that unsubscribes and resubscribes ids over and over.
 const MAX_SUBS: usize = 1 << 17;
+/// PX4 `vehicle_status.nav_state` names by value (`vehicle_status.msg`;
+/// 6, 7 and 16 are old states since removed).
+const NAV_STATES: [&str; 24] = [
+    "MANUAL", "ALTCTL", "POSCTL", "AUTO_MISSION", "AUTO_LOITER", "AUTO_RTL", "AUTO_RCRECOVER", "AUTO_RTGS",
+    "AUTO_LANDENGFAIL", "AUTO_LANDGPSFAIL", "ACRO", "", "DESCEND", "TERMINATION", "OFFBOARD", "STAB", "RATTITUDE",
+    "AUTO_TAKEOFF", "AUTO_LAND", "AUTO_FOLLOW_TARGET", "AUTO_PRECLAND", "ORBIT", "AUTO_VTOL_TAKEOFF", "EXTERNAL1",
+];
 const LOG_LEVELS: [&str; 8] = [
     "EMERG", "ALERT", "CRIT", "ERR", "WARNING", "NOTICE", "INFO", "DEBUG",
 ];
@@ -920,6 +934,9 @@ struct Parser {
     log_count: u64,
     tagged_log_count: u64,
     log_lines: Vec<(String, String)>,
+    /// Modes, messages, UTC time; GPS rows with an eph.
+    extras: Extras,
+    eph_rows: u64,
     syncs: u64,
     dropouts: u64,
     dropout_ms: u64,
@@ -966,6 +983,8 @@ impl Parser {
             log_count: 0,
             tagged_log_count: 0,
             log_lines: Vec::new(),
+            extras: Extras::default(),
+            eph_rows: 0,
             syncs: 0,
             dropouts: 0,
             dropout_ms: 0,
@@ -1102,6 +1121,10 @@ impl Parser {
                 // vehicle_gps_position (the selected receiver) when it has data.
                 if (*src == GpsSrc::VehicleGpsPosition) == plan.vgp {
                     let row = m.decode(t, d);
+                    if row.has_fix() {
+                        self.extras.utc(t, val(m.utc, d) / 1e6);
+                    }
+                    self.eph_rows += u64::from(row.eph.is_finite());
                     self.counts.gps += 1;
                     self.counts.gps_fix += u64::from(row.has_fix());
                     self.emit.push(t, RANK_GPS, Item::Row(row), sink);
@@ -1155,6 +1178,13 @@ impl Parser {
                     s.baro = val(Some(*loc), d);
                     self.counts.baro += 1;
                     self.emit.push(t, RANK_BARO, Item::Row(s), sink);
+                }
+            }
+            Role::Status(loc) => {
+                let n = val(Some(*loc), d);
+                if n.is_finite() {
+                    let name = NAV_STATES.get(n as usize).filter(|s| n >= 0.0 && !s.is_empty());
+                    self.extras.mode(t, name.map_or_else(|| format!("nav_state {n}"), |s| (*s).to_string()));
                 }
             }
         }
@@ -1272,12 +1302,23 @@ impl Parser {
             return;
         };
         let lvl = usize::from(if level >= b'0' { level - b'0' } else { level });
+        let t = le::<8>(ts, 0).map_or(0, u64::from_le_bytes) as f64 * 1e-6;
+        let mut text = String::from_utf8_lossy(trim_nul(msg)).trim_end().to_string();
+        // Every line up to INFO goes to the report's message list (DEBUG is
+        // developer chatter); the first warning-or-worse ones also to meta.
+        let kind = match lvl {
+            0..=3 => Some("error"),
+            4 => Some("warning"),
+            5 | 6 => Some("info"),
+            _ => None,
+        };
+        if let Some(kind) = kind {
+            self.extras.message(t, kind, &text);
+        }
         if lvl > 4 || self.log_lines.len() >= MAX_LOG_LINES {
             return;
         }
-        let t = le::<8>(ts, 0).map_or(0, u64::from_le_bytes) as f64 * 1e-6;
         let name = LOG_LEVELS.get(lvl).copied().unwrap_or("?");
-        let mut text = String::from_utf8_lossy(trim_nul(msg)).trim_end().to_string();
         truncate_utf8(&mut text, MAX_INFO_BYTES);
         self.log_lines.push((
             "log".to_string(),
@@ -1395,12 +1436,16 @@ impl Parser {
             .collect();
         topic_counts.sort();
 
+        let mut extras = std::mem::take(&mut self.extras);
+        extras.sort();
+        extras.eph_source = if self.eph_rows > 0 { EphSource::Eph } else { EphSource::None };
         LogSummary {
             format: "ulog",
             meta,
             warnings,
             missing,
             topic_counts,
+            extras,
         }
     }
 }
@@ -1458,6 +1503,28 @@ mod tests {
 
     fn parse(path: &str) -> LogData {
         read_ulog(&load(path)).unwrap_or_else(|e| panic!("{path}: {e}"))
+    }
+
+    /// vehicle_status.nav_state as modes, logging messages with times,
+    /// UTC from time_utc_usec, eph in metres. sample_px4_events.ulg is a
+    /// simulation whose boot clock is Unix time: its UTC offset is 0.
+    #[test]
+    fn modes_messages_and_utc() {
+        use crate::logs::extras::{iso_utc, EphSource};
+        let d = parse(px4!("sample_px4_events.ulg"));
+        let x = &d.extras;
+        assert_eq!(x.eph_source, EphSource::Eph);
+        let modes: Vec<&str> = x.modes.iter().map(|m| m.mode.as_str()).collect();
+        assert_eq!(modes, ["AUTO_LOITER", "AUTO_TAKEOFF", "AUTO_LOITER", "AUTO_RTL", "AUTO_LOITER"]);
+        assert_eq!(x.messages.len(), 18);
+        assert_eq!(x.messages[0].text, "[px4] Startup script returned successfully");
+        assert!(x.messages.iter().any(|m| m.level == "warning" && m.text == "[health_and_arming_checks] Preflight: GPS fix too low"));
+        assert!(x.utc_at_boot.unwrap().abs() < 1.0, "{:?}", x.utc_at_boot);
+        assert_eq!(&iso_utc(x.utc_at_boot.unwrap() + d.samples[0].t)[..19], "2024-03-18T14:49:10");
+        let q = parse(px4!("quadrotor_local.ulg"));
+        assert_eq!(q.extras.utc_at_boot, None, "no time_utc_usec in a local-position log");
+        assert!(q.extras.messages.iter().any(|m| m.level == "error" && m.text == "[health_and_arming_checks] Low battery"));
+        assert_eq!(parse(px4!("sample.ulg")).extras.eph_source, EphSource::None);
     }
 
     fn count(d: &LogData, key: &str) -> u64 {

@@ -9,6 +9,7 @@ import { readFile, mkdir, copyFile, access } from 'node:fs/promises';
 import { join, extname, normalize, dirname, sep } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { createRequire } from 'node:module';
+import { openOffline } from './offline.mjs';
 
 const here = dirname(fileURLToPath(import.meta.url));
 const repoRoot = join(here, '..', '..');
@@ -62,7 +63,7 @@ after(async () => {
   if (server) await new Promise((r) => server.close(r));
 });
 
-async function openPage() {
+async function openPage(tab = 'audit') {
   const page = await browser.newPage({ viewport: { width: 1600, height: 1300 }, acceptDownloads: true });
   const errors = [];
   page.on('pageerror', (e) => errors.push(`pageerror: ${e.message}`));
@@ -72,6 +73,14 @@ async function openPage() {
   await page.goto(base);
   // the worker has loaded the wasm module once the scenario list is filled
   await page.waitForFunction(() => !document.querySelector('#scenario').disabled, null, { timeout: 30000 });
+  // The research panels (compare, tightly coupled, GAN, figures) sit on a
+  // second tab, hidden until it is chosen.
+  assert.equal(await page.isVisible('#compare-panel'), false, 'research panels shown on the operator view');
+  if (tab === 'research') {
+    await page.click('.tabs [data-tab="research"]');
+    assert.equal(await page.isVisible('#compare-panel'), true);
+    assert.equal(await page.isVisible('#faults'), false);
+  }
   return { page, errors };
 }
 
@@ -125,6 +134,23 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
     await waitDone(page);
     const summary = await page.textContent('#summary');
     assert.match(summary, /ArduPilot DataFlash/);
+    // verdict first, with the flight's UTC start; HDOP named as such (no GPA)
+    assert.equal(await page.$eval('#verdict', (e) => e.dataset.verdict), 'faults');
+    const verdict = await page.textContent('#verdict');
+    assert.match(verdict, /^faults\d+ fault intervals?, \d+\.\d s flagged/);
+    assert.match(verdict, /started 2014-11-06 16:02:33 UTC/);
+    assert.match(verdict, /9 flight modes · 144 autopilot messages \(3 warnings\/errors\)/);
+    assert.match(verdict, /receiver quality as HDOP/);
+    assert.match(summary, /Receiver qualityHDOP/);
+    assert.match(summary, /Start \(UTC\)2014-11-06 16:02:33 UTC/);
+    assert.match(summary, /Flight modes \(9\)0\.0 s ALT_HOLD20\.4 s LOITER/);
+    assert.match(await page.textContent('#plot-gps .u-legend'), /HDOP/);
+    assert.doesNotMatch(await page.textContent('#plot-gps'), /eph/);
+    // times shown since the log's start (boot clock 20.664 s at the first row)
+    const shown = await page.$$eval('#faults tbody tr[data-index]', (trs) => trs.map((tr) => [Number(tr.dataset.start), Number(tr.cells[1].textContent)]));
+    for (const [boot, since] of shown) assert.ok(Math.abs(boot - 20.664 - since) < 0.006, `${boot} shown as ${since}`);
+    const tickLabels = await page.evaluate(() => window.navguard.plots[1].axes[0]._values);
+    assert.equal(tickLabels[0], '0', `x ticks not in time since start: ${tickLabels}`);
 
     const rows = await faultRows(page);
     assert.ok(rows.length > 0, 'fault table is empty');
@@ -186,13 +212,84 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
     const rep = JSON.parse(await readFile(await dj.path(), 'utf8'));
     assert.equal(rep.format, 'dataflash');
     assert.equal(rep.faults.length, rows.length);
+    assert.equal(rep.ephSource, 'hdop');
+    assert.equal(rep.startUtc, '2014-11-06T16:02:33.790Z');
+    // the HTML report the page exports is the CLI's file (same module)
+    const [dh] = await Promise.all([page.waitForEvent('download'), page.click('#export-html')]);
+    assert.match(dl.suggestedFilename() + dh.suggestedFilename(), /\.report\.html$/);
+    const html = await readFile(await dh.path(), 'utf8');
+    await assertOfflineReport(html, rows.length, join(artifacts, 'page-report.png'));
 
+    // the export clicks scrolled the page: back to the top
+    await page.evaluate(() => window.scrollTo(0, 0));
     const shot = join(artifacts, 'page.png');
     await page.screenshot({ path: shot, fullPage: true });
     // The README's picture is refreshed on request only, so a test run
     // leaves the work tree clean: UPDATE_SCREENSHOT=1 node --test tests/browser/
     if (process.env.UPDATE_SCREENSHOT) await copyFile(shot, join(www, 'screenshot.png'));
 
+    assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
+  } finally {
+    await page.close();
+  }
+});
+
+/** Open an HTML report with every network request aborted: it must need
+ * none, list `nIntervals` intervals, and draw its plots and track. */
+async function assertOfflineReport(html, nIntervals, shot) {
+  const { ctx, page, requests, errors } = await openOffline(browser, { html });
+  try {
+    assert.deepEqual(requests, [], 'the report fetched something');
+    assert.equal(await page.$$eval('table.faults tr.interval', (t) => t.length), nIntervals);
+    const plots = await page.$$eval('svg.plot', (ss) => ss.map((s) => ({ id: s.id, n: Array.from(s.querySelectorAll('path.ln')).map((p) => Number(p.dataset.n)) })));
+    assert.ok(plots.length >= 4, JSON.stringify(plots));
+    for (const p of plots) assert.ok(p.n.length > 0 && p.n.every((n) => n > 10), `empty plot ${JSON.stringify(p)}`);
+    assert.ok(await page.$eval('svg.track path.ln', (p) => p.getAttribute('d').length > 1000));
+    if (shot) await page.screenshot({ path: shot, fullPage: true });
+    assert.deepEqual(errors, []);
+    return page;
+  } finally {
+    await ctx.close();
+  }
+}
+
+/** Drop a CSV (lines) onto the page as a file named `name`. */
+const dropText = (page, name, lines) => page.evaluate(([n, text]) => {
+  const dt = new DataTransfer();
+  dt.items.add(new File([text], n, { type: 'text/csv' }));
+  window.dispatchEvent(new DragEvent('drop', { dataTransfer: dt, bubbles: true, cancelable: true }));
+}, [name, lines.join('\n') + '\n']);
+
+test('one spike does not set the residual axis; a log with no GPS says what was still checked', async () => {
+  const { page, errors } = await openPage();
+  try {
+    // 60 s of 5 Hz GPS heading north at 5 m/s with IMU and baro; one GPS
+    // row 20 m south of the track (a single spike)
+    const lines = ['t,lat,lon,alt,vn,ve,vd,fix,sats,eph,ax,ay,az,gx,gy,gz,qw,qx,qy,qz,baro'];
+    for (let i = 0; i <= 3000; i++) {
+      const t = i * 0.02;
+      const imu = ',0,0,-9.81,0,0,0,1,0,0,0,50';
+      if (i % 10 === 0) {
+        const north = 5 * t - (i === 1500 ? 20 : 0);
+        lines.push(`${t.toFixed(2)},${(31.94 + north / 111320).toFixed(9)},118.79,50,5,0,0,3,11,0.9${imu}`);
+      } else lines.push(`${t.toFixed(2)},,,,,,,,,${imu}`);
+    }
+    await dropText(page, 'spike.csv', lines);
+    await waitDone(page);
+    const y = await page.evaluate(() => { const u = window.navguard.plots[4]; return { min: u.scales.y.min, max: u.scales.y.max, clipped: u._clipped, lo: Math.min(...u.data[1].filter((v) => v != null)) }; });
+    assert.ok(y.lo < -15, `the spike is in the data: ${JSON.stringify(y)}`);
+    assert.ok(y.min > -8, `a single spike set the axis: ${JSON.stringify(y)}`);
+    assert.ok(y.clipped >= 1, `the clipped spike is not marked: ${JSON.stringify(y)}`);
+
+    // IMU and baro only: no verdict, and the page says what was checked
+    const imuOnly = ['t,ax,ay,az,gx,gy,gz,qw,qx,qy,qz,baro'];
+    for (let i = 0; i < 500; i++) imuOnly.push(`${(i / 50).toFixed(2)},0,0,-9.81,0,0,0,1,0,0,0,10`);
+    await dropText(page, 'imu-only.csv', imuOnly);
+    await page.waitForFunction(() => document.querySelector('#verdict').dataset.verdict === 'no verdict', null, { timeout: 60000 });
+    const v = await page.textContent('#verdict');
+    assert.match(v, /^no verdictNo verdict: no GPS fix in this log/);
+    assert.match(v, /Still checked: IMU \(50 Hz\): rates and data gaps; barometer/);
+    assert.match(await page.textContent('#faults tbody'), /No verdict: GPS unavailable.*Still checked: IMU/);
     assert.deepEqual(errors, [], `page errors:\n${errors.join('\n')}`);
   } finally {
     await page.close();
@@ -669,7 +766,7 @@ async function runCompare(page, seeds) {
 }
 
 test('compare methods: all 8 methods over seed 1, progress to 100 %, tables match a direct CompareRun', async () => {
-  const { page, errors } = await openPage();
+  const { page, errors } = await openPage('research');
   try {
     assert.equal(await page.$eval('#compare-seeds', (e) => e.value), '3');
     await runCompare(page, 1);
@@ -752,7 +849,7 @@ test('compare methods: all 8 methods over seed 1, progress to 100 %, tables matc
 });
 
 test('compare methods: a subset of methods with the opened log adds the real-log table; cancel keeps the worker', async () => {
-  const { page, errors } = await openPage();
+  const { page, errors } = await openPage('research');
   try {
     assert.equal(await page.$eval('#compare-log', (e) => e.disabled), true);
     // a 60 s GPS-only CSV, opened (and audited) through the file input
@@ -844,7 +941,7 @@ test('detector config: method chi2 reaches the worker and changes the audit; Def
 // ------------------------------------------------- tightly coupled GNSS/INS
 
 test('tightly coupled panel: Env 1, 20 m step, seed 7 names the injected satellite at once; navguard-tight figures load', async () => {
-  const { page, errors } = await openPage();
+  const { page, errors } = await openPage('research');
   try {
     await page.selectOption('#tight-env', '1');
     await page.selectOption('#tight-type', '1');
@@ -898,7 +995,7 @@ test('tightly coupled panel: Env 1, 20 m step, seed 7 names the injected satelli
 });
 
 test('tightly coupled panel: GAN-FDSR (embedded model) names the injected satellite and plots the GAN score', async () => {
-  const { page, errors } = await openPage();
+  const { page, errors } = await openPage('research');
   try {
     await page.selectOption('#tight-env', '1');
     await page.selectOption('#tight-type', '1');
@@ -960,7 +1057,7 @@ test('tightly coupled panel: GAN-FDSR (embedded model) names the injected satell
 });
 
 test('tightly coupled panel: train a GAN in the browser (cancel, then 1 epoch), then run with the trained model', async () => {
-  const { page, errors } = await openPage();
+  const { page, errors } = await openPage('research');
   try {
     await page.click('#tight-gan summary');
     assert.equal(await page.$eval('#tight-use-trained', (e) => e.disabled), true);

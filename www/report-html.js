@@ -1,0 +1,1 @@
+../pkg-config/lib/html-report.mjs
