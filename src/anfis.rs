@@ -32,8 +32,9 @@ const MIN_SIGMA: f64 = 0.05;
 /// ANFIS parameters.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Anfis {
-    /// Membership centres and widths per input: `[input][mf]`.
+    /// Membership centres per input: `[input][mf]`.
     pub centre: [[f64; M]; 2],
+    /// Membership widths per input: `[input][mf]` (positive).
     pub sigma: [[f64; M]; 2],
     /// Consequents per rule `[p, q, r]`, rule index `i * M + j`.
     pub conseq: [[f64; CP]; RULES],
@@ -292,6 +293,7 @@ impl Anfis {
         best_mse
     }
 
+    /// Every parameter finite and every width positive.
     pub fn is_finite(&self) -> bool {
         self.centre.iter().flatten().all(|v| v.is_finite())
             && self.sigma.iter().flatten().all(|v| v.is_finite() && *v > 0.0)

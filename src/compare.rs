@@ -29,6 +29,7 @@ pub struct Case {
     pub group: String,
     /// Readable label, e.g. "step 5 m".
     pub label: String,
+    /// The simulated flight.
     pub scenario: Scenario,
 }
 
@@ -68,8 +69,11 @@ pub fn battery(seeds: &[u64]) -> Vec<Case> {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct KindResult {
+    /// The fault group (a fault kind name or "outage").
     pub group: String,
+    /// Faults of this group in the battery.
     pub faults: u64,
+    /// Of those, detected while active.
     pub detected: u64,
     /// Median delay over the detected faults, s (NaN if none).
     pub median_delay_s: f64,
@@ -79,8 +83,11 @@ pub struct KindResult {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct LogResult {
+    /// The log's file name.
     pub name: String,
+    /// GPS epochs evaluated.
     pub gps_epochs: u64,
+    /// Share of them flagged.
     pub flagged_fraction: f64,
 }
 
@@ -88,15 +95,21 @@ pub struct LogResult {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct MethodResult {
+    /// The method's `config.method` name.
     pub method: &'static str,
     /// Pooled over the fault flights' labelled epochs.
     pub metrics: Metrics,
+    /// Hours of clean flight run.
     pub clean_hours: f64,
+    /// Alarm episodes on the clean flights.
     pub clean_alarms: u64,
+    /// `clean_alarms / clean_hours`.
     pub false_alarms_per_hour: f64,
     /// Share of clean flights' GPS epochs flagged.
     pub clean_flagged_fraction: f64,
+    /// Detection per fault group.
     pub kinds: Vec<KindResult>,
+    /// Flagged share per real log given.
     pub logs: Vec<LogResult>,
     /// Rows processed per second by this method (whole battery, this machine).
     pub rows_per_s: f64,
@@ -106,8 +119,11 @@ pub struct MethodResult {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Comparison {
+    /// Simulator seeds of the battery.
     pub seeds: Vec<u64>,
+    /// Flights per method.
     pub flights: usize,
+    /// One result per method compared.
     pub methods: Vec<MethodResult>,
 }
 
@@ -177,6 +193,7 @@ impl CompareRun {
         if n == 0 { 1.0 } else { self.next as f64 / n as f64 }
     }
 
+    /// Whether every unit of work has run.
     pub fn done(&self) -> bool {
         self.next >= self.units()
     }

@@ -7,6 +7,8 @@ use crate::filter::FilterNoise;
 use crate::indicators::IndicatorSettings;
 use crate::methods::Method;
 
+pub use crate::error::ConfigError;
+
 /// What users pass (JSON / JS object, camelCase). Unknown fields are rejected.
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename_all = "camelCase")]
@@ -49,16 +51,27 @@ pub struct ConfigInput {
 /// Checked configuration.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Config {
+    /// Detection method (see [`crate::methods`]).
     pub method: Method,
+    /// Training condition TC: retrain after this many new fault epochs.
     pub tc: usize,
+    /// Length q of each database D1, D2 (epochs).
     pub q: usize,
+    /// Indicator window (GPS epochs).
     pub window: usize,
+    /// F-indicator decision threshold.
     pub threshold: f64,
+    /// Online retraining on/off.
     pub retrain: bool,
+    /// Filter noise (σ of each sensor).
     pub noise: FilterNoiseCfg,
+    /// Time without a fix that counts as an outage, s (`None`: from the GPS rate).
     pub outage_timeout: Option<f64>,
+    /// Longest coast on rejected GPS before re-anchoring the filter, s.
     pub max_coast: f64,
+    /// A pause with no rows longer than this is a logging gap, s.
     pub data_gap: f64,
+    /// A trained model (`None`: the embedded default).
     #[serde(skip)]
     pub model: Option<crate::model::Model>,
 }
@@ -66,11 +79,17 @@ pub struct Config {
 /// Serializable mirror of the filter noise (for reports).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FilterNoiseCfg {
+    /// GPS horizontal position noise, m.
     pub gps_pos_sigma: f64,
+    /// GPS vertical position noise, m.
     pub gps_alt_sigma: f64,
+    /// GPS velocity noise, m/s.
     pub gps_vel_sigma: f64,
+    /// Barometer noise, m.
     pub baro_sigma: f64,
+    /// Accelerometer noise for the INS prediction, m/s².
     pub accel_noise: f64,
+    /// Acceleration noise of the constant-velocity model (GPS only), m/s².
     pub cv_accel_noise: f64,
 }
 
@@ -101,19 +120,19 @@ impl Default for Config {
     }
 }
 
-fn num(field: &str, v: Option<f64>, lo: f64, hi: f64, default: f64) -> Result<f64, String> {
+fn num(field: &str, v: Option<f64>, lo: f64, hi: f64, default: f64) -> Result<f64, ConfigError> {
     match v {
         None => Ok(default),
         Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(x),
-        Some(x) => Err(format!("config.{field}: must be a number in [{lo}, {hi}], got {x}")),
+        Some(x) => Err(ConfigError::new(field, format!("must be a number in [{lo}, {hi}], got {x}"))),
     }
 }
 
-fn int(field: &str, v: Option<f64>, lo: usize, hi: usize, default: usize) -> Result<usize, String> {
+fn int(field: &str, v: Option<f64>, lo: usize, hi: usize, default: usize) -> Result<usize, ConfigError> {
     match v {
         None => Ok(default),
         Some(x) if x.is_finite() && x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => Ok(x as usize),
-        Some(x) => Err(format!("config.{field}: must be an integer in {lo}..={hi}, got {x}")),
+        Some(x) => Err(ConfigError::new(field, format!("must be an integer in {lo}..={hi}, got {x}"))),
     }
 }
 
@@ -126,16 +145,16 @@ impl ConfigInput {
 
     /// Reject a field name that is not a config field (for front ends that
     /// deserialize field by field and so never see unknown keys).
-    pub fn check_field_name(name: &str) -> Result<(), String> {
+    pub fn check_field_name(name: &str) -> Result<(), ConfigError> {
         if Self::FIELDS.contains(&name) {
             Ok(())
         } else {
-            Err(format!("config.{name}: unknown field (known: {})", Self::FIELDS.join(", ")))
+            Err(ConfigError::new(name, format!("unknown field (known: {})", Self::FIELDS.join(", "))))
         }
     }
 
     /// Validate into a [`Config`].
-    pub fn check(&self) -> Result<Config, String> {
+    pub fn check(&self) -> Result<Config, ConfigError> {
         let d = Config::default();
         let method = match &self.method {
             Some(m) => Method::parse(m)?,
@@ -147,7 +166,7 @@ impl ConfigInput {
             Some(x) => Some(num("outageTimeout", Some(x), 0.01, 3600.0, 0.0)?),
         };
         if let Some(m) = &self.model {
-            m.check().map_err(|e| format!("config.model: {e}"))?;
+            m.check().map_err(|e| ConfigError::new("model", e))?;
         }
         Ok(Config {
             method,
@@ -172,27 +191,27 @@ impl ConfigInput {
     }
 
     /// Parse and check a JSON config text (`{}` or empty for defaults).
-    pub fn from_json(text: &str) -> Result<Config, String> {
+    pub fn from_json(text: &str) -> Result<Config, ConfigError> {
         if text.trim().is_empty() {
             return Ok(Config::default());
         }
-        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| format!("config: not JSON: {e}"))?;
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| ConfigError::new("", format!("not JSON: {e}")))?;
         Self::from_value(v)
     }
 
     /// Check a config given as JSON data (the wasm facade copies a JS
     /// object into this form first, reading every field once).
-    pub fn from_value(v: serde_json::Value) -> Result<Config, String> {
+    pub fn from_value(v: serde_json::Value) -> Result<Config, ConfigError> {
         let serde_json::Value::Object(map) = v else {
-            return Err("config: must be a JSON object".into());
+            return Err(ConfigError::new("", "must be a JSON object"));
         };
         // Field by field first, so a type error names its field.
         for (k, val) in &map {
             Self::check_field_name(k)?;
             let one = serde_json::Value::Object([(k.clone(), val.clone())].into_iter().collect());
-            serde_json::from_value::<ConfigInput>(one).map_err(|e| format!("config.{k}: {e}"))?;
+            serde_json::from_value::<ConfigInput>(one).map_err(|e| ConfigError::new(k.as_str(), e.to_string()))?;
         }
-        let input: ConfigInput = serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| format!("config: {e}"))?;
+        let input: ConfigInput = serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| ConfigError::new("", e.to_string()))?;
         input.check()
     }
 }
@@ -222,6 +241,7 @@ impl Config {
         }
     }
 
+    /// The filter noise in the filter's own form.
     pub fn filter_noise(&self) -> FilterNoise {
         let n = &self.noise;
         FilterNoise {
@@ -235,6 +255,7 @@ impl Config {
         }
     }
 
+    /// The indicator settings this config implies (its window).
     pub fn indicator_settings(&self) -> IndicatorSettings {
         IndicatorSettings { window: self.window, ..IndicatorSettings::default() }
     }
@@ -253,22 +274,28 @@ mod tests {
     #[test]
     fn errors_name_field_and_value() {
         let e = ConfigInput::from_json(r#"{"tc": 0}"#).unwrap_err();
+        assert_eq!(e, ConfigError::new("tc", "must be an integer in 1..=1000000, got 0"));
+        assert_eq!(e.to_string(), "config.tc: must be an integer in 1..=1000000, got 0");
+        let e = e.to_string();
         assert!(e.contains("config.tc") && e.contains("got 0"), "{e}");
-        let e = ConfigInput::from_json(r#"{"window": 2.5}"#).unwrap_err();
+        let e = ConfigInput::from_json(r#"{"window": 2.5}"#).unwrap_err().to_string();
         assert!(e.contains("config.window") && e.contains("2.5"), "{e}");
-        assert!(ConfigInput::check_field_name("bogus").unwrap_err().contains("config.bogus"));
+        assert!(ConfigInput::check_field_name("bogus").unwrap_err().to_string().contains("config.bogus"));
         assert!(ConfigInput::FIELDS.iter().all(|f| ConfigInput::check_field_name(f).is_ok()));
         // Every declared field round-trips through serde (FIELDS matches the struct).
         for f in ConfigInput::FIELDS {
             let v = match f { "method" => "\"anfis\"", "retrain" => "true", "model" => "null", _ => "1" };
             let r = ConfigInput::from_json(&format!("{{\"{f}\": {v}}}"));
-            assert!(!r.as_ref().is_err_and(|e| e.contains("unknown field")), "{f}: {r:?}");
+            assert!(!r.as_ref().is_err_and(|e| e.message.contains("unknown field")), "{f}: {r:?}");
         }
-        let e = ConfigInput::from_json(r#"{"bogus": 1}"#).unwrap_err();
+        let e = ConfigInput::from_json(r#"{"bogus": 1}"#).unwrap_err().to_string();
         assert!(e.contains("bogus"), "{e}");
-        let e = ConfigInput::from_json(r#"{"method": "magic"}"#).unwrap_err();
+        let e = ConfigInput::from_json(r#"{"method": "magic"}"#).unwrap_err().to_string();
         assert!(e.contains("config.method") && e.contains("magic"), "{e}");
-        let e = ConfigInput::from_json(r#"{"gpsPosSigma": -1}"#).unwrap_err();
+        let e = ConfigInput::from_json(r#"{"gpsPosSigma": -1}"#).unwrap_err().to_string();
         assert!(e.contains("config.gpsPosSigma") && e.contains("-1"), "{e}");
+        // Whole-config errors have no field.
+        assert_eq!(ConfigInput::from_json("[1]").unwrap_err().to_string(), "config: must be a JSON object");
+        assert!(ConfigInput::from_json("{").unwrap_err().to_string().starts_with("config: not JSON: "));
     }
 }

@@ -23,6 +23,7 @@ pub struct Anchor {
 }
 
 impl Anchor {
+    /// The tangent frame at latitude, longitude (deg) and altitude (m).
     pub fn at(lat: f64, lon: f64, alt: f64) -> Self {
         let phi = lat.to_radians();
         let s = libm::sin(phi);

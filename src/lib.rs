@@ -11,6 +11,7 @@ pub mod calibrate;
 pub mod compare;
 pub mod config;
 pub mod detector;
+pub mod error;
 pub mod filter;
 pub mod frames;
 pub mod indicators;
@@ -28,7 +29,7 @@ pub mod snapshot;
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
 
-pub use config::{Config, ConfigInput};
+pub use config::{Config, ConfigError, ConfigInput};
 pub use detector::{Detector, InputError, Output};
 pub use model::Model;
 pub use sample::Sample;

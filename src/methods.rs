@@ -28,27 +28,38 @@
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::error::ConfigError;
 use crate::thresholds::{Evaluator, SpeedBands, Verdict};
 
 /// Detection method (`config.method`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Method {
+    /// The online KF–ANFIS of Sun et al. 2017 (default).
     #[default]
     Anfis,
+    /// Per-measurement normalised-innovation test (Shen et al. Appendix A).
     Chi2,
+    /// Whole-vector chi-square test on the NIS.
     Nis,
+    /// 5-σ innovation gate per channel (PX4 EKF2, ArduPilot EKF3).
     Gate,
+    /// Mahalanobis distance of the residual increment (Lin, Khalastchi).
     Mahalanobis,
+    /// Baek & Jo RMS threshold (RT).
     Rms,
+    /// Baek & Jo knee threshold (KT).
     Knee,
+    /// Baek & Jo adaptive threshold (AT).
     Adaptive,
 }
 
 impl Method {
+    /// Every method, the default first.
     pub const ALL: [Method; 8] =
         [Method::Anfis, Method::Chi2, Method::Nis, Method::Gate, Method::Mahalanobis, Method::Rms, Method::Knee, Method::Adaptive];
 
+    /// The name users give in `config.method`.
     pub fn name(self) -> &'static str {
         match self {
             Method::Anfis => "anfis",
@@ -62,10 +73,11 @@ impl Method {
         }
     }
 
-    pub fn parse(s: &str) -> Result<Method, String> {
+    /// The method named `s` (as in `config.method`); the error lists them.
+    pub fn parse(s: &str) -> Result<Method, ConfigError> {
         Method::ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
             let names: Vec<String> = Method::ALL.iter().map(|m| format!("\"{}\"", m.name())).collect();
-            format!("config.method: unknown method \"{s}\" (available: {})", names.join(", "))
+            ConfigError::new("method", format!("unknown method \"{s}\" (available: {})", names.join(", ")))
         })
     }
 }
@@ -85,9 +97,11 @@ pub const GATE_SIGMA: f64 = 5.0;
 /// the receiver gives no velocity.
 #[derive(Clone, Copy, Debug)]
 pub struct EpochInnovations {
+    /// Innovations ν: position N/E/D (m), velocity N/E/D (m/s).
     pub nu: [f64; 6],
     /// Full `S = H P⁻ Hᵀ + R` (top-left m×m block used).
     pub s: SMatrix<f64, 6, 6>,
+    /// Number of GPS channels present (3 or 6).
     pub m: usize,
     /// The barometer's largest normalised innovation since the last GPS
     /// epoch, as (ν m, S m²), if a baro sample was checked.
@@ -112,7 +126,9 @@ impl EpochInnovations {
 /// (position, velocity), whether that group failed its own test.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Decision {
+    /// Test statistic over its threshold: ≥ 1 is a fault.
     pub score: f64,
+    /// Per group (position, velocity, baro): failed its own test.
     pub failed: [bool; 3],
 }
 
@@ -210,6 +226,7 @@ fn outer(x: &[f64; 3]) -> [f64; 6] {
 }
 
 impl MahaWindow {
+    /// Empty the window (a new reference after an episode or a reset).
     pub fn clear(&mut self) {
         self.head = 0;
         self.len = 0;
@@ -288,10 +305,12 @@ impl MahaWindow {
         }
     }
 
+    /// Epochs in the window.
     pub fn len(&self) -> usize {
         self.len
     }
 
+    /// No epoch yet.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -315,7 +334,9 @@ pub fn mahalanobis(win: &[MahaWindow; 2], dr: [[f64; 3]; 2], has_vel: bool) -> D
 /// largest normalised innovation), one threshold per speed band.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct PoolState {
+    /// Operating modes by horizontal speed.
     pub bands: SpeedBands,
+    /// The threshold pool and its streaming state.
     pub eval: Evaluator,
 }
 
@@ -481,7 +502,7 @@ mod tests {
         for m in Method::ALL {
             assert_eq!(Method::parse(m.name()).unwrap(), m);
         }
-        let e = Method::parse("magic").unwrap_err();
+        let e = Method::parse("magic").unwrap_err().to_string();
         assert!(e.contains("config.method") && e.contains("magic") && e.contains("\"knee\""), "{e}");
     }
 }

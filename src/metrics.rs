@@ -12,20 +12,31 @@ use serde::Serialize;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Metrics {
+    /// Fault epochs flagged (true positives).
     pub tp: u64,
+    /// Normal epochs flagged (false positives).
     pub fp: u64,
+    /// Normal epochs not flagged.
     pub tn: u64,
+    /// Fault epochs missed (false negatives).
     pub r#fn: u64,
+    /// (TP + TN) / all.
     pub accuracy: f64,
+    /// FP / (FP + TN).
     pub false_alarm_rate: f64,
+    /// FN / (TP + FN).
     pub misdetection_rate: f64,
+    /// TP / (TP + FP).
     pub precision: f64,
+    /// TP / (TP + FN).
     pub recall: f64,
+    /// F-beta score with β = 2 (recall weighted over precision).
     pub f2: f64,
     /// Mean detection delay over detected fault intervals, s (NaN if none).
     pub mean_detection_delay: f64,
-    /// Fault intervals in the labels, and how many were flagged at least once.
+    /// Fault intervals in the labels.
     pub fault_intervals: u64,
+    /// Of those, flagged at least once.
     pub detected_intervals: u64,
 }
 

@@ -8,37 +8,51 @@
 pub struct Sample {
     /// Time, s (required, non-decreasing).
     pub t: f64,
-    /// GPS fix, WGS-84 deg / deg / m AMSL.
+    /// GPS latitude, WGS-84 deg.
     pub lat: f64,
+    /// GPS longitude, deg.
     pub lon: f64,
+    /// GPS altitude, m AMSL.
     pub alt: f64,
-    /// GPS fix already in a local NED frame, m.
+    /// GPS north, when the fix is already in a local NED frame, m.
     pub pn: f64,
+    /// GPS east, local NED, m.
     pub pe: f64,
+    /// GPS down, local NED, m.
     pub pd: f64,
-    /// GPS velocity NED, m/s.
+    /// GPS velocity north, m/s.
     pub vn: f64,
+    /// GPS velocity east, m/s.
     pub ve: f64,
+    /// GPS velocity down, m/s.
     pub vd: f64,
     /// Fix type (0 none, 2 2D, 3 3D, >3 DGPS/RTK).
     pub fix: f64,
     /// Satellites used.
     pub sats: f64,
-    /// Receiver accuracy estimates, m.
+    /// Horizontal accuracy estimate, m.
     pub eph: f64,
+    /// Vertical accuracy estimate, m.
     pub epv: f64,
-    /// Specific force, body FRD, m/s².
+    /// Specific force, body forward, m/s².
     pub ax: f64,
+    /// Specific force, body right, m/s².
     pub ay: f64,
+    /// Specific force, body down, m/s².
     pub az: f64,
-    /// Gyro rates, body FRD, rad/s.
+    /// Gyro rate about body forward, rad/s.
     pub gx: f64,
+    /// Gyro rate about body right, rad/s.
     pub gy: f64,
+    /// Gyro rate about body down, rad/s.
     pub gz: f64,
-    /// Attitude quaternion body FRD -> NED (Hamilton, scalar first).
+    /// Attitude quaternion body FRD -> NED (Hamilton), scalar part.
     pub qw: f64,
+    /// Attitude quaternion x.
     pub qx: f64,
+    /// Attitude quaternion y.
     pub qy: f64,
+    /// Attitude quaternion z.
     pub qz: f64,
     /// Barometric altitude, m, positive up.
     pub baro: f64,

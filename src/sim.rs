@@ -69,6 +69,7 @@ pub enum FaultKind {
 }
 
 impl FaultKind {
+    /// Every fault kind.
     pub const ALL: [FaultKind; 7] = [
         FaultKind::Step,
         FaultKind::Ramp,
@@ -79,6 +80,7 @@ impl FaultKind {
         FaultKind::AccelBias,
     ];
 
+    /// The kind's name in presets and reports (kebab-case).
     pub fn name(self) -> &'static str {
         match self {
             FaultKind::Step => "step",
@@ -95,8 +97,11 @@ impl FaultKind {
 /// One injected fault over `[start, end)` s.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Fault {
+    /// What fails.
     pub kind: FaultKind,
+    /// Onset, s.
     pub start: f64,
+    /// End (exclusive), s.
     pub end: f64,
     /// Units per kind (see [`FaultKind`]); ignored for frozen / zero-velocity / baro-stuck.
     #[serde(default)]
@@ -107,20 +112,27 @@ pub struct Fault {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "camelCase")]
 pub struct Scenario {
+    /// Scenario name (a preset's or free text).
     pub name: String,
+    /// Seed of every random draw.
     pub seed: u64,
     /// Flight length, s.
     pub duration: f64,
+    /// The flight's shape.
     pub trajectory: Trajectory,
     /// Rates, Hz. `imu_rate` 0 = GPS-only stream; `baro_rate` 0 = no baro.
     pub imu_rate: f64,
+    /// GPS rate, Hz.
     pub gps_rate: f64,
+    /// Barometer rate, Hz (0: no baro).
     pub baro_rate: f64,
     /// Write GPS velocity columns.
     pub gps_velocity: bool,
     /// Outage intervals `[start, end)` s (labelled fault) and their mode.
     pub outages: Vec<[f64; 2]>,
+    /// How the receiver reports an outage.
     pub outage_mode: OutageMode,
+    /// Injected sensor faults.
     pub faults: Vec<Fault>,
 }
 
@@ -197,6 +209,7 @@ impl Scenario {
         })
     }
 
+    /// Rates, duration and intervals in range; the error names the field.
     pub fn check(&self) -> Result<(), String> {
         let bad = |f: &str, v: f64| Err(format!("scenario.{f}: bad value {v}"));
         if !(self.duration.is_finite() && self.duration > 0.0 && self.duration <= 86_400.0) {
@@ -220,6 +233,7 @@ impl Scenario {
     }
 }
 
+/// Names accepted by [`Scenario::preset`].
 pub fn preset_names() -> Vec<&'static str> {
     let mut v = vec!["paper", "paper-silent", "clean-aggressive", "clean-survey", "clean-paper", "gps-only"];
     v.extend(FaultKind::ALL.iter().map(|k| k.name()));

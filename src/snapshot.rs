@@ -16,6 +16,29 @@ use serde::{Deserialize, Serialize};
 
 use crate::detector::Detector;
 
+/// A snapshot that cannot be written or read back: not a snapshot, another
+/// format version, damaged (checksum) or forged (inconsistent state).
+/// Displays as `snapshot: <message>`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SnapshotError {
+    /// What was wrong.
+    pub message: String,
+}
+
+impl SnapshotError {
+    fn new(message: impl Into<String>) -> Self {
+        SnapshotError { message: message.into() }
+    }
+}
+
+impl core::fmt::Display for SnapshotError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "snapshot: {}", self.message)
+    }
+}
+
+impl std::error::Error for SnapshotError {}
+
 /// Format tag at the start of every snapshot.
 pub const FORMAT: &str = "navguard-snapshot";
 /// Bumped whenever the detector's state layout changes; older snapshots are
@@ -38,8 +61,11 @@ struct Header<'a> {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Info {
+    /// Snapshot format version ([`VERSION`] when this build can read it).
     pub version: u32,
+    /// The navguard version that wrote it.
     pub crate_version: String,
+    /// Size of the snapshot, bytes.
     pub bytes: usize,
 }
 
@@ -47,52 +73,52 @@ fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
-fn header(bytes: &[u8]) -> Result<(Header<'_>, &[u8]), String> {
+fn header(bytes: &[u8]) -> Result<(Header<'_>, &[u8]), SnapshotError> {
     let (h, body) = postcard::take_from_bytes::<Header>(bytes)
-        .map_err(|e| format!("snapshot: not a navguard snapshot ({e}, {} bytes)", bytes.len()))?;
+        .map_err(|e| SnapshotError::new(format!("not a navguard snapshot ({e}, {} bytes)", bytes.len())))?;
     if h.format != FORMAT {
-        return Err(format!("snapshot: format \"{}\" is not \"{FORMAT}\"", h.format));
+        return Err(SnapshotError::new(format!("format \"{}\" is not \"{FORMAT}\"", h.format)));
     }
     if h.version != VERSION {
-        return Err(format!(
-            "snapshot: version {} (written by navguard {}) cannot be read by navguard {}, which reads version {VERSION}",
+        return Err(SnapshotError::new(format!(
+            "version {} (written by navguard {}) cannot be read by navguard {}, which reads version {VERSION}",
             h.version,
             h.crate_version,
             env!("CARGO_PKG_VERSION")
-        ));
+        )));
     }
     if fnv1a(body) != h.checksum {
-        return Err(format!("snapshot: checksum mismatch ({} body bytes): the snapshot is damaged", body.len()));
+        return Err(SnapshotError::new(format!("checksum mismatch ({} body bytes): the snapshot is damaged", body.len())));
     }
     Ok((h, body))
 }
 
 /// Read a snapshot's header (and verify its checksum) without restoring it.
-pub fn info(bytes: &[u8]) -> Result<Info, String> {
+pub fn info(bytes: &[u8]) -> Result<Info, SnapshotError> {
     let (h, _) = header(bytes)?;
     Ok(Info { version: h.version, crate_version: h.crate_version.to_string(), bytes: bytes.len() })
 }
 
 impl Detector {
     /// The detector's whole state as bytes (see the module docs).
-    pub fn snapshot(&self) -> Result<Vec<u8>, String> {
-        let body = postcard::to_allocvec(self).map_err(|e| format!("snapshot: {e}"))?;
+    pub fn snapshot(&self) -> Result<Vec<u8>, SnapshotError> {
+        let body = postcard::to_allocvec(self).map_err(|e| SnapshotError::new(e.to_string()))?;
         let h = Header { format: FORMAT, version: VERSION, crate_version: env!("CARGO_PKG_VERSION"), checksum: fnv1a(&body) };
-        let mut out = postcard::to_allocvec(&h).map_err(|e| format!("snapshot: {e}"))?;
+        let mut out = postcard::to_allocvec(&h).map_err(|e| SnapshotError::new(e.to_string()))?;
         out.extend_from_slice(&body);
         Ok(out)
     }
 
     /// A detector resumed from [`Detector::snapshot`] bytes: it continues
     /// exactly where the snapshotted one stood.
-    pub fn restore(bytes: &[u8]) -> Result<Detector, String> {
+    pub fn restore(bytes: &[u8]) -> Result<Detector, SnapshotError> {
         let (_, body) = header(bytes)?;
         let (mut det, rest) =
-            postcard::take_from_bytes::<Detector>(body).map_err(|e| format!("snapshot: body does not parse: {e}"))?;
+            postcard::take_from_bytes::<Detector>(body).map_err(|e| SnapshotError::new(format!("body does not parse: {e}")))?;
         if !rest.is_empty() {
-            return Err(format!("snapshot: {} unexpected bytes after the body", rest.len()));
+            return Err(SnapshotError::new(format!("{} unexpected bytes after the body", rest.len())));
         }
-        det.check_restored().map_err(|e| format!("snapshot: {e}"))?;
+        det.check_restored().map_err(|e| SnapshotError::new(e.to_string()))?;
         Ok(det)
     }
 }
@@ -153,26 +179,28 @@ mod tests {
         let mut d = Detector::new(Config::default()).unwrap();
         run(&mut d, &rows[..2000]);
         let snap = d.snapshot().unwrap();
-        assert!(Detector::restore(&[]).unwrap_err().contains("not a navguard snapshot"));
-        assert!(Detector::restore(b"hello world").unwrap_err().contains("snapshot"));
+        let e = Detector::restore(&[]).unwrap_err();
+        assert!(e.message.starts_with("not a navguard snapshot"), "{e:?}");
+        assert_eq!(e.to_string(), format!("snapshot: {}", e.message));
+        assert!(Detector::restore(b"hello world").unwrap_err().to_string().contains("snapshot"));
         let mut bad = snap.clone();
         let n = bad.len();
         bad[n / 2] ^= 0x40;
-        assert!(Detector::restore(&bad).unwrap_err().contains("checksum"));
-        assert!(Detector::restore(&snap[..n - 7]).unwrap_err().contains("checksum"));
+        assert!(Detector::restore(&bad).unwrap_err().to_string().contains("checksum"));
+        assert!(Detector::restore(&snap[..n - 7]).unwrap_err().to_string().contains("checksum"));
         // Another format version is refused by name.
         let (h, body) = header(&snap).unwrap();
         let other = Header { version: VERSION + 1, ..h };
         let mut v2 = postcard::to_allocvec(&other).unwrap();
         v2.extend_from_slice(body);
-        let e = Detector::restore(&v2).unwrap_err();
+        let e = Detector::restore(&v2).unwrap_err().to_string();
         assert!(e.contains(&format!("version {}", VERSION + 1)) && e.contains(&format!("reads version {VERSION}")), "{e}");
         // So is an older one (version 3: the layout before the fast-start
         // counters), before its body is parsed.
         let older = Header { version: 3, ..h };
         let mut v_old = postcard::to_allocvec(&older).unwrap();
         v_old.extend_from_slice(body);
-        let e = Detector::restore(&v_old).unwrap_err();
+        let e = Detector::restore(&v_old).unwrap_err().to_string();
         assert_eq!(
             e,
             format!(
@@ -185,7 +213,7 @@ mod tests {
         // caught by the shape check, not by a panic on the next push.
         let mut forged = d.clone();
         forged.forge_ring_head_for_test(usize::MAX / 2);
-        let e = Detector::restore(&forged.snapshot().unwrap()).unwrap_err();
+        let e = Detector::restore(&forged.snapshot().unwrap()).unwrap_err().to_string();
         assert!(e.contains("database D1"), "{e}");
     }
 

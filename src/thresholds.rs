@@ -114,7 +114,9 @@ pub enum Method {
 }
 
 impl Method {
+    /// Every method, in the paper's table order.
     pub const ALL: [Method; 3] = [Method::At, Method::Kt, Method::Rt];
+    /// Short name: "at", "kt" or "rt".
     pub fn name(self) -> &'static str {
         match self {
             Method::Rt => "RT",
@@ -135,10 +137,14 @@ pub enum Verdict {
     /// A transient fault. Every sample of the last `backdate` samples that
     /// was reported [`Verdict::Anomaly`] now belongs to this fault too
     /// (always 0 for RT, which has a single stage).
-    Fault { backdate: u32 },
+    Fault {
+        /// How many earlier samples the fault reaches back over.
+        backdate: u32,
+    },
 }
 
 impl Verdict {
+    /// Whether this verdict is a (confirmed) fault.
     pub fn is_fault(self) -> bool {
         matches!(self, Verdict::Fault { .. })
     }
@@ -179,6 +185,7 @@ fn check_psi(psi: f64) -> Result<(), String> {
 /// RT fit for one mode: the RMS of each disjoint training window.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub struct RmsThreshold {
+    /// Window length w (samples).
     pub w: usize,
     /// `sqrt(Σ_{window i} r²/w)` for the `⌊m/w⌋` disjoint windows.
     pub window_rms: Vec<f64>,
@@ -208,6 +215,7 @@ pub fn fit_rms(residuals: &[f64], w: usize) -> Result<RmsThreshold, String> {
 /// The normality model Φ_ν of one mode (Eq. (1)).
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub struct NormalityModel {
+    /// Window length w (samples).
     pub w: usize,
     /// Offset ψ between reference points.
     pub psi: f64,
@@ -311,10 +319,13 @@ pub fn kneedle_convex_decreasing(x: &[f64], y: &[f64]) -> Result<usize, String> 
 /// KT fit for one mode.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub struct KneeThreshold {
+    /// The mode's normality model Φ_ν.
     pub model: NormalityModel,
     /// Index of the knee in `model.rho`.
     pub knee_index: usize,
+    /// ρ_ν at the knee: the residual level counted in each window.
     pub rho: f64,
+    /// σ_ν at the knee: the most exceedances of ρ_ν a normal window shows.
     pub sigma: f64,
 }
 
@@ -435,6 +446,7 @@ impl Default for AdaptiveConfig {
 }
 
 impl AdaptiveConfig {
+    /// Every parameter in range; the error names it.
     pub fn check(&self) -> Result<(), String> {
         check_w(self.w)?;
         check_psi(self.psi)?;
@@ -457,7 +469,9 @@ impl AdaptiveConfig {
 /// AT fit for one mode, with everything needed to audit it.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub struct AdaptiveThreshold {
+    /// The settings it was fitted with.
     pub config: AdaptiveConfig,
+    /// The mode's normality model Φ_ν.
     pub model: NormalityModel,
     /// U(ρ_r, σ_u), normalised to [0, 1].
     pub uncertainty: Vec<f64>,
@@ -465,9 +479,11 @@ pub struct AdaptiveThreshold {
     pub detectability: Vec<f64>,
     /// U(x) = −u·x + a.
     pub u: f64,
+    /// Intercept of U(x).
     pub a: f64,
     /// D(x) = p·x + c.
     pub p: f64,
+    /// Intercept of D(x).
     pub c: f64,
     /// x_m: the number of reference points used by the regressions.
     pub x_m: f64,
@@ -620,14 +636,19 @@ pub fn fit_adaptive(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<AdaptiveT
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 // Externally tagged (serde's default): detector snapshots use postcard,
 // which cannot read internally tagged enums.
+/// One operating mode's threshold, of any method.
 #[serde(rename_all = "lowercase")]
 pub enum ModeThreshold {
+    /// RMS threshold.
     Rt(RmsThreshold),
+    /// Knee threshold.
     Kt(KneeThreshold),
+    /// Adaptive threshold.
     At(AdaptiveThreshold),
 }
 
 impl ModeThreshold {
+    /// Which method this threshold is.
     pub fn method(&self) -> Method {
         match self {
             ModeThreshold::Rt(_) => Method::Rt,
@@ -656,8 +677,11 @@ impl ModeThreshold {
 /// one method and one window.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub struct ThresholdPool {
+    /// The method of every mode.
     pub method: Method,
+    /// Window length w (samples).
     pub w: usize,
+    /// One threshold per operating mode.
     pub modes: Vec<ModeThreshold>,
 }
 
@@ -717,10 +741,12 @@ impl ThresholdPool {
 /// last edge). For the paper's 0.7/1.0/1.3/1.6 m/s: edges 0.85, 1.15, 1.45.
 #[derive(Serialize, Deserialize, Clone, Debug, PartialEq)]
 pub struct SpeedBands {
+    /// Band edges, m/s, strictly increasing.
     pub edges: Vec<f64>,
 }
 
 impl SpeedBands {
+    /// Bands from finite, strictly increasing edges (m/s).
     pub fn new(edges: Vec<f64>) -> Result<Self, String> {
         if let Some(i) = edges.iter().position(|e| !e.is_finite()) {
             return Err(format!("edges[{i}] = {}: must be finite", edges[i]));
@@ -734,9 +760,11 @@ impl SpeedBands {
     pub fn around(speeds: &[f64]) -> Result<Self, String> {
         SpeedBands::new(speeds.windows(2).map(|p| 0.5 * (p[0] + p[1])).collect())
     }
+    /// Number of modes (edges + 1).
     pub fn modes(&self) -> usize {
         self.edges.len() + 1
     }
+    /// The mode of a speed (m/s); an error for a non-finite speed.
     pub fn mode_of(&self, speed: f64) -> Result<usize, String> {
         if !speed.is_finite() {
             return Err(format!("speed = {speed}: must be finite"));
@@ -844,12 +872,14 @@ pub struct Evaluator {
 }
 
 impl Evaluator {
+    /// A streaming evaluator over a checked pool.
     pub fn new(pool: ThresholdPool) -> Result<Self, String> {
         pool.check()?;
         let core = TwoStage::new(pool.w)?;
         Ok(Evaluator { pool, core, sumsq: 0.0, since_refresh: 0 })
     }
 
+    /// The pool it evaluates with.
     pub fn pool(&self) -> &ThresholdPool {
         &self.pool
     }

@@ -133,7 +133,7 @@ fn bad_config_fields_are_named() {
         (r#"{"gpsPosSigma": 0}"#, "config.gpsPosSigma"),
         (r#"{"maxCoast": 1e9}"#, "config.maxCoast"),
     ] {
-        let e = ConfigInput::from_json(json).unwrap_err();
+        let e = ConfigInput::from_json(json).unwrap_err().to_string();
         assert!(e.contains(needle), "{json}: {e}");
     }
 }

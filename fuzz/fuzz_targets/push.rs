@@ -155,7 +155,7 @@ fuzz_target!(|data: &[u8]| {
     let cfg = match ConfigInput::from_json(&json) {
         Ok(c) => c,
         Err(e) => {
-            assert!(e.starts_with("config"), "config error without its prefix: {e}");
+            assert!(e.to_string().starts_with("config"), "config error without its prefix: {e}");
             navguard::Config::default()
         }
     };

@@ -61,6 +61,7 @@ impl Orbit {
 /// A set of orbits.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Constellation {
+    /// One orbit per satellite, in PRN order.
     pub orbits: Vec<Orbit>,
 }
 
@@ -120,6 +121,7 @@ impl Constellation {
 /// A visible satellite.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SatView {
+    /// Satellite id.
     pub prn: u8,
     /// Elevation above the local horizontal, rad.
     pub elevation: f64,
@@ -141,6 +143,7 @@ pub struct Site {
 }
 
 impl Site {
+    /// The site at latitude, longitude (deg) and altitude (m); an error names a bad value.
     pub fn new(lat_deg: f64, lon_deg: f64, alt_m: f64) -> Result<Self, TightError> {
         if !(lat_deg.is_finite() && (-90.0..=90.0).contains(&lat_deg)) {
             return Err(TightError::new("lat", format!("must be in [-90, 90] deg, got {lat_deg}")));
@@ -164,10 +167,12 @@ impl Site {
         Ok(Site { lla: (lat_deg, lon_deg, alt_m), ecef, c_ne })
     }
 
+    /// ECEF position (m) to the site's NED frame (m).
     pub fn ecef_to_ned(&self, e: &Vector3<f64>) -> Vector3<f64> {
         self.c_ne * (e - self.ecef)
     }
 
+    /// Site NED position (m) to ECEF (m).
     pub fn ned_to_ecef(&self, n: &Vector3<f64>) -> Vector3<f64> {
         self.c_ne.transpose() * n + self.ecef
     }
@@ -188,10 +193,15 @@ pub fn elevation_azimuth(p: &Vector3<f64>, s: &Vector3<f64>) -> (f64, f64) {
 /// Dilution of precision.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Dop {
+    /// Geometric DOP.
     pub gdop: f64,
+    /// Position DOP.
     pub pdop: f64,
+    /// Horizontal DOP.
     pub hdop: f64,
+    /// Vertical DOP.
     pub vdop: f64,
+    /// Time DOP.
     pub tdop: f64,
 }
 

@@ -37,6 +37,7 @@ pub fn w_test(pv: &DMatrix<f64>, v: &DVector<f64>) -> Option<DVector<f64>> {
 pub struct Detection {
     /// Row in the measurement set.
     pub index: usize,
+    /// The flagged satellite.
     pub prn: u8,
     /// Its normalized innovation λ (signed).
     pub lambda: f64,
@@ -138,6 +139,7 @@ pub enum Strategy {
 }
 
 impl Strategy {
+    /// Name in reports (as in the paper's tables).
     pub fn name(self) -> &'static str {
         match self {
             Strategy::None => "none",
@@ -174,9 +176,11 @@ pub struct EpochDecision {
     pub lambdas: Vec<(u8, f64)>,
     /// Largest |λ|.
     pub lambda_max: f64,
+    /// The flagged satellite, if any.
     pub detection: Option<Detection>,
     /// RDPOP of the flagged satellite.
     pub rdpop: Option<f64>,
+    /// What was done with the measurements.
     pub action: Action,
     /// GAN-FDSR only: (prn, score) per satellite (NaN while its window fills).
     #[serde(default)]
@@ -186,6 +190,7 @@ pub struct EpochDecision {
 /// Detection parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FdsrConfig {
+    /// How a detected fault is handled.
     pub strategy: Strategy,
     /// False-alarm rate α of the λ test.
     pub alpha: f64,
@@ -200,6 +205,7 @@ impl Default for FdsrConfig {
 }
 
 impl FdsrConfig {
+    /// Check α and η; returns the detection threshold T1.
     pub fn check(&self) -> Result<f64, TightError> {
         if !(self.eta.is_finite() && self.eta >= 0.0) {
             return Err(TightError::new("eta", format!("must be finite and >= 0, got {}", self.eta)));
@@ -219,9 +225,11 @@ impl FdsrConfig {
 /// disagrees with the predictor, `|ρ − ρ̂| / √(R + σ̂²) > T1`: a stand-in for
 /// the GAN generation score, checked against the same threshold.
 pub struct Reconfigurator {
+    /// The detection parameters.
     pub cfg: FdsrConfig,
     /// Detection threshold T1.
     pub t1: f64,
+    /// Rebuilds a flagged pseudo-range (switch strategy).
     pub predictor: Box<dyn RangePredictor>,
     /// Satellites under repair (switch only): prn -> time first flagged, s.
     pub under_repair: BTreeMap<u8, f64>,

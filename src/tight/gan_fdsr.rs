@@ -30,6 +30,7 @@ pub enum GanInput {
 }
 
 impl GanInput {
+    /// Short name in reports: "rhoD" or "lambda".
     pub fn name(self) -> &'static str {
         match self {
             GanInput::IncrementDifference => "rhoD",
@@ -56,6 +57,7 @@ pub struct GanDetectorModel {
     /// Mean and standard deviation of the series on the fault-free training
     /// data (m for ρD, unitless for λ).
     pub mean: f64,
+    /// Standard deviation of the series (same units as `mean`).
     pub scale: f64,
     /// RMS of `y − G(z_k)` per element on the training windows (standardised
     /// units): the error of one generated increment difference.
@@ -92,6 +94,7 @@ impl GanDetectorModel {
         true
     }
 
+    /// The model as bytes (magic, then postcard).
     pub fn to_bytes(&self) -> Result<Vec<u8>, TightError> {
         let mut out = MAGIC.to_vec();
         let body = postcard::to_allocvec(self).map_err(|e| TightError::new("gan model", format!("cannot encode: {e}")))?;
@@ -99,6 +102,7 @@ impl GanDetectorModel {
         Ok(out)
     }
 
+    /// A model read back from [`GanDetectorModel::to_bytes`], checked (a forged model is an error).
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, TightError> {
         let body = bytes
             .strip_prefix(MAGIC.as_slice())
@@ -151,6 +155,7 @@ struct Sat {
 /// One satellite's result at an epoch.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SatScore {
+    /// Satellite id.
     pub prn: u8,
     /// Score of eq. (Score), or NaN while the window is filling.
     pub score: f64,
@@ -160,6 +165,7 @@ pub struct SatScore {
 
 /// Runs the GAN detection function over every satellite of each epoch.
 pub struct GanMonitor {
+    /// The trained detector.
     pub model: GanDetectorModel,
     /// Longest gap (s) that keeps a satellite's history: one missed epoch
     /// at the 1 Hz the models are trained on. Below 0.4 Hz the windows never
@@ -175,6 +181,7 @@ pub struct GanMonitor {
 const BASE_EPOCHS: usize = 5;
 
 impl GanMonitor {
+    /// A monitor with no satellite history yet.
     pub fn new(model: GanDetectorModel) -> Self {
         GanMonitor { model, max_gap: 2.5, sats: BTreeMap::new(), y: Vec::new(), scratch: GanScratch::default() }
     }
@@ -279,6 +286,7 @@ impl GanMonitor {
         true
     }
 
+    /// The satellite is healthy again: drop its repair state.
     pub fn end_repair(&mut self, prn: u8) {
         if let Some(s) = self.sats.get_mut(&prn) {
             s.repair = None;

@@ -20,7 +20,9 @@ pub struct GanTrainOptions {
     pub train_seeds: Vec<u64>,
     /// Seeds of other fault-free flights that set T2.
     pub calib_seeds: Vec<u64>,
+    /// GAN architecture and training settings.
     pub gan: GanConfig,
+    /// Which series the GAN learns.
     pub input: GanInput,
     /// See [`GanDetectorModel::lambda_test`].
     pub lambda_test: bool,
@@ -30,6 +32,7 @@ pub struct GanTrainOptions {
     pub skip_s: f64,
     /// Largest delay and embedding dimension searched.
     pub max_tau: usize,
+    /// Largest embedding dimension searched.
     pub max_m: usize,
 }
 
@@ -57,10 +60,15 @@ impl Default for GanTrainOptions {
 pub struct GanTrainReport {
     /// Chaos indices of every satellite of the first training flight (Table 1).
     pub chaos: Vec<(String, ChaosIndices)>,
+    /// Delay τ chosen (median over satellites).
     pub tau: usize,
+    /// Embedding dimension m chosen (median over satellites).
     pub m: usize,
+    /// Training windows.
     pub train_windows: usize,
+    /// Windows of the held-out flights that set T2.
     pub calib_windows: usize,
+    /// The threshold T2 and how it was set.
     pub threshold: Threshold,
 }
 

@@ -63,6 +63,7 @@ pub struct TightError {
 }
 
 impl TightError {
+    /// An error on `field`.
     pub fn new(field: impl Into<String>, message: impl Into<String>) -> Self {
         TightError { field: field.into(), message: message.into() }
     }

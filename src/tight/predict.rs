@@ -49,6 +49,7 @@ pub struct FilterPredictor {
 }
 
 impl FilterPredictor {
+    /// A predictor with variance `base_variance` (m²) at age 0 and the default smoothing, growth and age limit.
     pub fn new(base_variance: f64) -> Self {
         FilterPredictor { smoothing: 0.2, base_variance, sigma_rate: 0.5, max_age: 120.0, history: BTreeMap::new() }
     }

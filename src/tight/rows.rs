@@ -43,8 +43,9 @@ pub struct InitialState {
     pub velocity_ned: [f64; 3],
     /// Roll, pitch, yaw (deg).
     pub roll_pitch_yaw_deg: [f64; 3],
-    /// Receiver clock bias (m) and drift (m/s).
+    /// Receiver clock bias, m.
     pub clock_bias_m: f64,
+    /// Receiver clock drift, m/s.
     pub clock_drift_mps: f64,
 }
 

@@ -36,6 +36,7 @@ pub enum FaultType {
 }
 
 impl FaultType {
+    /// The five fault types of Table 4.
     pub const ALL: [FaultType; 5] = [FaultType::Step20, FaultType::Step10, FaultType::Ramp1, FaultType::Ramp05, FaultType::Ramp03];
 
     /// Fault on the pseudo-range (m), `dt` seconds after onset.
@@ -49,6 +50,7 @@ impl FaultType {
         }
     }
 
+    /// Name in reports.
     pub fn name(self) -> &'static str {
         match self {
             FaultType::Step20 => "Type 1 (step 20 m)",
@@ -63,13 +65,18 @@ impl FaultType {
 /// An injected fault on one satellite during `[start, end)` (s).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FaultSpec {
+    /// The faulty satellite.
     pub prn: u8,
+    /// Step or ramp, and its size.
     pub kind: FaultType,
+    /// Onset, s.
     pub start: f64,
+    /// End (exclusive), s.
     pub end: f64,
 }
 
 impl FaultSpec {
+    /// The pseudo-range error added to satellite `prn` at time `t` (s), m.
     pub fn bias(&self, prn: u8, t: f64) -> f64 {
         if prn == self.prn && t >= self.start && t < self.end {
             self.kind.bias(t - self.start)
@@ -96,8 +103,9 @@ pub struct SimConfig {
     pub mask_deg: f64,
     /// White pseudo-range noise, m.
     pub sigma_white: f64,
-    /// Multipath standard deviation (m) and correlation time (s).
+    /// Multipath standard deviation, m.
     pub multipath_sigma: f64,
+    /// Multipath correlation time, s.
     pub multipath_tau: f64,
     /// Troposphere residual as a fraction of the 2.4 m zenith delay, drawn
     /// per satellite in `[−x, x]`.
@@ -142,7 +150,9 @@ impl SimConfig {
 /// Constellation, site and the constellation time at which runs start.
 #[derive(Clone, Debug)]
 pub struct World {
+    /// The satellites' orbits.
     pub constellation: Constellation,
+    /// Where the receiver flies.
     pub site: Site,
     /// Constellation time of run time 0, s.
     pub t0: f64,
@@ -194,18 +204,23 @@ pub const ENV5_MAX_PDOP: f64 = 100.0;
 /// An observation environment (Table 3).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Environment {
+    /// Environment number: 1–4 as in Table 3, 5 the six-satellite case of Sec. 4.2.
     pub id: u8,
+    /// Short name.
     pub name: String,
     /// How the satellite set was chosen.
     pub description: String,
     /// Satellites the receiver tracks.
     pub prns: Vec<u8>,
+    /// The satellite the fault is injected on.
     pub faulty_prn: u8,
-    /// Fault section, s.
+    /// Start of the fault section, s.
     pub fault_start: f64,
+    /// End of the fault section, s.
     pub fault_end: f64,
-    /// PDOP with all tracked satellites and without the faulty one.
+    /// PDOP with all tracked satellites.
     pub pdop: f64,
+    /// PDOP without the faulty satellite.
     pub pdop_without_faulty: f64,
 }
 
@@ -409,6 +424,7 @@ pub struct RunRecord {
     pub lambda_faulty: Vec<f64>,
     /// Flagged satellite per epoch (0 = none).
     pub flagged_prn: Vec<u8>,
+    /// What the reconfigurator did per epoch.
     pub action: Vec<Action>,
     /// NEES of the full 17-dim error state.
     pub nees: Vec<f64>,
@@ -474,14 +490,19 @@ impl RunRecord {
 /// One run.
 #[derive(Clone, Debug)]
 pub struct RunSpec<'a> {
+    /// Constellation and site.
     pub world: &'a World,
+    /// Sensor and noise settings.
     pub cfg: &'a SimConfig,
     /// Tracked satellites.
     pub prns: &'a [u8],
     /// Satellite whose RDPOP and λ are recorded.
     pub watch_prn: u8,
+    /// The injected fault, if any.
     pub fault: Option<FaultSpec>,
+    /// Detection strategy and thresholds.
     pub fdsr: FdsrConfig,
+    /// Seed of every random draw.
     pub seed: u64,
     /// GAN-FDSR model for [`Strategy::Gan`]; `None`: the embedded default.
     pub gan: Option<&'a GanDetectorModel>,
@@ -640,8 +661,11 @@ fn run_inner(spec: &RunSpec, mut rows: Option<&mut Vec<EpochRow>>) -> Result<Run
 /// Results of one environment (Figure 8) or fault type (Figure 11).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CaseResult {
+    /// Case label (environment or fault type).
     pub label: String,
+    /// The environment it ran in.
     pub env: Environment,
+    /// The injected fault.
     pub fault: FaultSpec,
     /// (strategy label, record): "FF" (fault-free, no detection), "FDI" (FI),
     /// "FDA" (FA), "RDPOP-switch".
@@ -649,6 +673,7 @@ pub struct CaseResult {
 }
 
 impl CaseResult {
+    /// The run of strategy `label` ("FF", "FDI", ...).
     pub fn record(&self, label: &str) -> Option<&RunRecord> {
         self.runs.iter().find(|(l, _)| l == label).map(|(_, r)| r)
     }

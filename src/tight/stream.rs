@@ -45,9 +45,13 @@ pub struct TightConfig {
     pub alpha: f64,
     /// RDPOP threshold η.
     pub eta: f64,
+    /// Filter noise and initial uncertainty.
     pub ekf: EkfConfig,
+    /// Known initial state (else a least-squares fix).
     pub initial: Option<InitialState>,
+    /// Initial velocity without `initial`, NED, m/s.
     pub initial_velocity_ned: [f64; 3],
+    /// Initial yaw without `initial`, deg.
     pub initial_yaw_deg: f64,
 }
 
@@ -86,7 +90,9 @@ pub enum Status {
 /// Per-row output.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EpochOutput {
+    /// Row time, s.
     pub t: f64,
+    /// Status of the row.
     pub status: Status,
     /// The satellite flagged faulty at this epoch.
     pub faulty_prn: Option<u8>,
@@ -97,6 +103,7 @@ pub struct EpochOutput {
     pub lambda_max: f64,
     /// RDPOP of the flagged satellite.
     pub rdpop: Option<f64>,
+    /// What was done with the epoch's measurements (GNSS epochs only).
     pub action: Option<Action>,
     /// GAN-FDSR only: the largest GAN score of the epoch (T2 is the model's
     /// threshold); `None` for other strategies or while windows fill.
@@ -104,9 +111,11 @@ pub struct EpochOutput {
     pub gan_score_max: Option<f64>,
     /// Pseudo-ranges at this row.
     pub n_sats: usize,
-    /// Estimated position (NED, m), velocity (NED, m/s), clock bias (m).
+    /// Estimated position, NED, m.
     pub position_ned: [f64; 3],
+    /// Estimated velocity, NED, m/s.
     pub velocity_ned: [f64; 3],
+    /// Estimated clock bias, m.
     pub clock_bias_m: f64,
 }
 

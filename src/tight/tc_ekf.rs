@@ -21,18 +21,27 @@ use super::TightError;
 
 /// Error-state dimension.
 pub const N: usize = 17;
+/// Offset of the attitude error (3) in the error state.
 pub const ATT: usize = 0;
+/// Offset of the velocity error (3).
 pub const VEL: usize = 3;
+/// Offset of the position error (3).
 pub const POS: usize = 6;
+/// Offset of the gyro bias (3).
 pub const BG: usize = 9;
+/// Offset of the accelerometer bias (3).
 pub const BA: usize = 12;
+/// Offset of the receiver clock bias.
 pub const CLK: usize = 15;
+/// Offset of the receiver clock drift.
 pub const DRIFT: usize = 16;
 
 /// Standard gravity, m/s² (NED: +down).
 pub const GRAVITY: f64 = 9.806_65;
 
+/// A 17×17 error-state matrix.
 pub type Mat17 = SMatrix<f64, N, N>;
+/// A 17-element error-state vector.
 pub type Vec17 = SVector<f64, N>;
 
 /// Skew-symmetric (cross-product) matrix.
@@ -120,6 +129,7 @@ impl Default for ImuNoise {
 /// Filter configuration.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct EkfConfig {
+    /// IMU noise densities.
     pub imu: ImuNoise,
     /// Clock bias white-frequency density S_f, m²/s.
     pub clock_sf: f64,
@@ -135,13 +145,21 @@ pub struct EkfConfig {
 /// Initial standard deviations of the error state.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct InitSigma {
+    /// Roll and pitch, rad.
     pub roll_pitch: f64,
+    /// Yaw, rad.
     pub yaw: f64,
+    /// Velocity, m/s.
     pub vel: f64,
+    /// Position, m.
     pub pos: f64,
+    /// Gyro bias, rad/s.
     pub gyro_bias: f64,
+    /// Accelerometer bias, m/s².
     pub accel_bias: f64,
+    /// Clock bias, m.
     pub clk: f64,
+    /// Clock drift, m/s.
     pub drift: f64,
 }
 
@@ -161,6 +179,7 @@ impl Default for InitSigma {
 }
 
 impl InitSigma {
+    /// The 1σ of every error-state element, in state order.
     pub fn as_vector(&self) -> Vec17 {
         let mut s = Vec17::zeros();
         s[0] = self.roll_pitch;
@@ -192,6 +211,7 @@ impl Default for EkfConfig {
 }
 
 impl EkfConfig {
+    /// Every density and σ finite and positive; the error names it.
     pub fn check(&self) -> Result<(), TightError> {
         let pos = |f: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
@@ -222,6 +242,7 @@ impl EkfConfig {
 /// One pseudo-range with the satellite position it refers to.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PrMeas {
+    /// Satellite id.
     pub prn: u8,
     /// Pseudo-range, m.
     pub pr: f64,
@@ -232,6 +253,7 @@ pub struct PrMeas {
 /// A linearised pseudo-range measurement set (the paper's Z, H, R, v).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Linearized {
+    /// Satellite of each row.
     pub prns: Vec<u8>,
     /// Innovations `v = Z − h(X̄)`, m (eq. 9).
     pub v: DVector<f64>,
@@ -244,12 +266,15 @@ pub struct Linearized {
 }
 
 impl Linearized {
+    /// Number of measurements.
     pub fn len(&self) -> usize {
         self.prns.len()
     }
+    /// No measurement.
     pub fn is_empty(&self) -> bool {
         self.prns.is_empty()
     }
+    /// Row of satellite `prn`, if present.
     pub fn index_of(&self, prn: u8) -> Option<usize> {
         self.prns.iter().position(|&p| p == prn)
     }
@@ -284,9 +309,11 @@ impl Linearized {
 /// The filter.
 #[derive(Clone, Debug)]
 pub struct TcEkf {
+    /// The navigation state estimate.
     pub x: NavState,
     /// Error-state covariance, 17×17.
     pub p: Mat17,
+    /// Noise and initial uncertainty.
     pub cfg: EkfConfig,
 }
 

@@ -71,7 +71,7 @@ impl CompareRun {
             .methods
             .unwrap_or_default()
             .iter()
-            .map(|m| crate::methods::Method::parse(m).map_err(|e| e.replace("config.method", "compare options.methods")))
+            .map(|m| crate::methods::Method::parse(m).map_err(|e| e.to_string().replace("config.method", "compare options.methods")))
             .collect::<Result<Vec<_>, _>>()
             .map_err(err)?;
         Ok(CompareRun { run: Some(crate::compare::CompareRun::new(&seeds, &methods, Some(js_clock)).map_err(err)?) })

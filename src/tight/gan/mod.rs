@@ -172,6 +172,7 @@ pub fn subsequences(y: &[f64], m: usize, w: usize, u: usize) -> Result<Vec<Vec<f
 pub struct TrainProgress {
     /// 1-based epoch just finished.
     pub epoch: usize,
+    /// Epochs in the whole training.
     pub epochs: usize,
     /// `−[log D(x) + log(1 − D(G(z)))]`.
     pub d_loss: f64,
@@ -203,6 +204,7 @@ pub struct GanModel {
 }
 
 impl GanModel {
+    /// The settings it was trained with.
     pub fn config(&self) -> &GanConfig {
         &self.cfg
     }

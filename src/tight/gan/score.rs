@@ -37,9 +37,9 @@ pub struct Score {
 pub struct Threshold {
     /// Tolerated false-alarm rate α.
     pub alpha: f64,
-    /// Mean and sample std of the fault-free scores (the paper's H0:
-    /// `Score ~ N(μ, σ)`).
+    /// Mean of the fault-free scores (the paper's H0: `Score ~ N(μ, σ)`).
     pub mu: f64,
+    /// Sample standard deviation of the fault-free scores.
     pub sigma: f64,
     /// `μ + z_{1−α} σ`.
     pub t2_normal: f64,
