@@ -34,7 +34,9 @@ pub struct FaultInterval {
     /// Largest offset of the driving sensor from the filter's prediction
     /// inside the interval (the reference: the estimate coasting on the IMU
     /// and, for a position-only fault, the GPS velocity): position and baro
-    /// in m, velocity in m/s (see `offset_unit`). None for an outage.
+    /// in m, velocity in m/s (see `offset_unit`). None for an outage
+    /// (absent in JSON and in JS alike).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub peak_offset: Option<f64>,
     /// "m", "m/s", or "" for an outage.
     pub offset_unit: &'static str,

@@ -17,12 +17,14 @@ const base = {
 };
 const fault = { start: 110, end: 112.5, kind: 'residual', peakF: 0.97, driver: 'gps_position', indicator: 'R', rows: 13 };
 
-test('verdicts: faults, clean, no verdict (no GPS), unreadable; the reconciled list wins when present', () => {
+test('verdicts: faults, clean, no verdict (no GPS), unreadable; every table counts the causal faults', () => {
   assert.equal(H.verdictOf({ ...base, faults: [fault] }), 'faults');
   assert.equal(H.verdictOf(base), 'clean');
   assert.equal(H.verdictOf({ ...base, gpsAvailable: false, faults: [] }), 'no verdict');
   assert.equal(H.verdictOf(null), 'unreadable');
-  assert.deepEqual(H.faultList({ ...base, faults: [fault, fault], reconciled: [fault] }), [fault]);
+  assert.deepEqual(H.faultList({ ...base, faults: [fault, fault], reconciled: [fault] }), [fault, fault]);
+  assert.equal(H.reconciledCount({ ...base, faults: [fault, fault], reconciled: [fault] }), 1);
+  assert.equal(H.reconciledCount(base), null);
   assert.equal(H.qualityLabel(base), 'HDOP');
   assert.equal(H.qualityLabel({ ...base, ephSource: 'eph' }), 'eph (m)');
   assert.equal(H.fmtUtc('2014-11-06T16:02:33.790Z'), '2014-11-06 16:02:33 UTC');
