@@ -179,10 +179,14 @@ test('Vite build, no configuration: the build runs in Chromium', async () => {
 // publish dry run it holds a placeholder token: a publisher is logged in,
 // and npm's only warning otherwise is "requires you to be logged in" (the
 // dry run never sends it anywhere).
+// The `npm_config_*` variables a parent `npm test` exports (this machine's
+// own settings, such as nodedir, which npm 11 warns about) are dropped too.
+const cleanEnv = Object.fromEntries(Object.entries(process.env).filter(([k]) => !/^npm_config_/i.test(k)));
+
 function npm(args, cwd) {
   const userconfig = join(work, 'npmrc');
   writeFileSync(userconfig, '//registry.npmjs.org/:_authToken=placeholder-for-dry-run\n');
-  return spawnSync('npm', args, { cwd, encoding: 'utf8', env: { ...process.env, npm_config_userconfig: userconfig, npm_config_update_notifier: 'false', npm_config_fund: 'false', npm_config_audit: 'false' } });
+  return spawnSync('npm', args, { cwd, encoding: 'utf8', env: { ...cleanEnv, npm_config_userconfig: userconfig, npm_config_update_notifier: 'false', npm_config_fund: 'false', npm_config_audit: 'false' } });
 }
 
 test('npm publish --dry-run is clean; the tarball installs into a clean folder and `npx navguard audit LOG` works', () => {
@@ -198,7 +202,7 @@ test('npm publish --dry-run is clean; the tarball installs into a clean folder a
   assert.equal(npm(['init', '-y'], clean).status, 0);
   const inst = npm(['install', join(work, tgz)], clean);
   assert.equal(inst.status, 0, inst.stderr);
-  const run = spawnSync('npx', ['navguard', 'audit', LOG, '--json'], { cwd: clean, encoding: 'utf8', env: { ...process.env, npm_config_userconfig: join(work, 'npmrc') } });
+  const run = spawnSync('npx', ['navguard', 'audit', LOG, '--json'], { cwd: clean, encoding: 'utf8', env: { ...cleanEnv, npm_config_userconfig: join(work, 'npmrc') } });
   // 0: clean, 1: faults found (issue 16 item 4); 2 would be unreadable.
   assert.ok(run.status === 0 || run.status === 1, `exit ${run.status}: ${run.stderr}`);
   assert.ok(run.stdout.trim().startsWith('{'), run.stderr);
