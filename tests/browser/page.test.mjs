@@ -440,7 +440,7 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
     // snapshot size and format version shown in the panel
     const snapText = await page.textContent('#live-snap');
     assert.match(snapText, new RegExp(`^${(before.info.bytes / 1024).toFixed(1)} KiB · format v4 · navguard \\d+\\.\\d+\\.\\d+`));
-    assert.ok(before.info.bytes > 10000 && before.info.version === 3, JSON.stringify(before.info));
+    assert.ok(before.info.bytes > 10000 && before.info.version === 4, JSON.stringify(before.info));
     await page.waitForFunction(() => /^\d\d:\d\d:\d\d · [\d,]+ rows · [2-9]\d* saves$/.test(document.querySelector('#live-saved').textContent), null, { timeout: 5000 });
     await page.screenshot({ path: join(artifacts, 'page-live.png'), fullPage: true });
 
@@ -609,10 +609,10 @@ test('live session: a damaged or foreign-version snapshot shows the error banner
     assert.equal(await readSaved(page), null, 'Stop did not remove the saved session');
 
     // another format version: rejected on load by snapshotInfo, never offered
-    await storeRecord(page, 1000, 's = s.slice(); s[1 + s[0]] = 4; return s;');
+    await storeRecord(page, 1000, 's = s.slice(); s[1 + s[0]] = 5; return s;');
     await reloadForOffer(page);
     let banner = await page.$eval('#error', (e) => (e.hidden ? '' : e.textContent));
-    assert.match(banner, /saved live session was discarded: snapshot: version 4 \(written by navguard [\d.]+\) cannot be read by navguard [\d.]+, which reads version 3/);
+    assert.match(banner, /saved live session was discarded: snapshot: version 5 \(written by navguard [\d.]+\) cannot be read by navguard [\d.]+, which reads version 4/);
     assert.equal(await page.$eval('#live-offer', (e) => e.hidden), true);
     assert.equal(await readSaved(page), null);
 
