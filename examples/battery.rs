@@ -206,6 +206,7 @@ fn main() -> Result<(), String> {
             println!("{}", row_md(r));
         }
     }
+    print_fp_sources(&results);
     if a.verbose {
         println!("\n### Flights\n");
         for r in &results {
@@ -214,4 +215,31 @@ fn main() -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Where the false-positive epochs lie: on clean flights, before a faulty
+/// flight's first fault, within `AFTER_WINDOW` s after a fault ends, or
+/// later. Says which mechanism the false-alarm rate is made of.
+fn print_fp_sources(results: &[FlightResult]) {
+    let mut n = [0u64; 4];
+    let only_true = std::env::var("FP_TRUE_CLOCK").is_ok();
+    for r in results.iter().filter(|r| !only_true || r.flight.clock.rate == 1.0) {
+        let f = &r.flight;
+        for e in r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0) {
+            let slot = if f.faults.is_empty() {
+                0
+            } else if f.faults.iter().all(|ft| e.t < ft.start_log) {
+                1
+            } else if f.faults.iter().any(|ft| e.t >= ft.end_log && e.t < ft.end_log + battery::AFTER_WINDOW * f.clock.rate) {
+                2
+            } else {
+                3
+            };
+            n[slot] += 1;
+        }
+    }
+    let total = n.iter().sum::<u64>().max(1) as f64;
+    println!("\n### False-positive epochs by where they lie\n\n| clean flights | before the first fault | ≤ {} s after a fault | later | total |\n|---|---|---|---|---|", battery::AFTER_WINDOW);
+    let cell = |k: u64| format!("{k} ({:.0}%)", 100.0 * k as f64 / total);
+    println!("| {} | {} | {} | {} | {} |", cell(n[0]), cell(n[1]), cell(n[2]), cell(n[3]), n.iter().sum::<u64>());
 }
