@@ -27,6 +27,8 @@
 //!   dynamic-pressure error ∝ airspeed², prop-wash error ∝ climb rate and a
 //!   ground-effect band near take-off and landing.
 //! - **Boot clock**: `t` = boot offset + rate × true time, rate 0.92–1.0.
+//!   Every GPS row carries the receiver's time (`gps_time`): true time plus
+//!   a GPS-seconds epoch, to the ms, so the rate can be measured against it.
 //! - **Faults** ([`FaultKind`]), 3–120 s, some starting in the first 20 s.
 //!   `label` (GPS rows only, as in [`crate::sim`]) is 1 exactly on the rows
 //!   whose true time lies in a fault's `[start, end)`.
@@ -352,12 +354,15 @@ pub struct BaroDraw {
     pub ground_height: f64,
 }
 
-/// Boot-clock draws: `t_log = boot + rate × t_true`.
+/// Boot-clock draws: `t_log = boot + rate × t_true`; the receiver's time
+/// `gps_time = gps_epoch + t_true`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct ClockDraw {
     pub rate: f64,
     pub boot: f64,
+    /// GPS seconds (since 1980) at true time 0: 2011–2027.
+    pub gps_epoch: f64,
 }
 
 /// Trajectory draws (the shape itself is built from `seed` by [`Path::build`]).
@@ -403,6 +408,8 @@ const SALT_GPS: u64 = 0x0D1A_F00D_0000_0003;
 const SALT_IMU: u64 = 0x0D1A_F00D_0000_0004;
 const SALT_BARO: u64 = 0x0D1A_F00D_0000_0005;
 const SALT_SLOW: u64 = 0x0D1A_F00D_0000_0006;
+/// Its own stream, so the receiver-time epoch moved no other draw.
+const SALT_CLOCK: u64 = 0x0D1A_F00D_0000_0007;
 
 fn pick<T: Copy>(rng: &mut Rng, xs: &[T]) -> T {
     let i = ((rng.uniform() * xs.len() as f64) as usize).min(xs.len().saturating_sub(1));
@@ -468,6 +475,7 @@ impl Flight {
         let clock = ClockDraw {
             rate: if rng.uniform() < 0.5 { 1.0 } else { rng.range(0.92, 1.0) },
             boot: rng.range(5.0, 60.0),
+            gps_epoch: libm::round(Rng::new(seed ^ SALT_CLOCK).range(1.0e9, 1.5e9)),
         };
         let mut f = Flight {
             split,
@@ -524,6 +532,11 @@ impl Flight {
     /// Boot-clock time of a true time, s (quantised to 1 µs like the rows).
     pub fn log_time(&self, t: f64) -> f64 {
         libm::round((self.clock.boot + self.clock.rate * t) * 1e6) / 1e6
+    }
+
+    /// The receiver's time of a true time, s (to the ms, as receivers report).
+    pub fn gps_time(&self, t: f64) -> f64 {
+        self.clock.gps_epoch + libm::round(t * 1e3) / 1e3
     }
 
     /// Whether any fault is active at true time `t`.
@@ -1263,6 +1276,7 @@ fn gps_rows(f: &Flight, path: &Path) -> Vec<Sample> {
         }
         let mut s = Sample::at(f.log_time(t));
         s.fix = fix;
+        s.gps_time = f.gps_time(t);
         if fix >= 2.0 {
             let (lat, lon, alt) = anchor.ned_to_lla(&pm).unwrap_or((f64::NAN, f64::NAN, f64::NAN));
             s.lat = lat;

@@ -266,11 +266,13 @@ struct Fix {
     y: Vector3<f64>,
     /// Velocity NED (m/s), when the receiver gives one.
     vel: Option<Vector3<f64>>,
+    /// The receiver's own time of the fix, s (NaN when the log has none).
+    gps_time: f64,
 }
 
 impl Fix {
     fn new(s: &Sample, anchor: &Anchor) -> Self {
-        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)) }
+        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)), gps_time: s.gps_time }
     }
 }
 
@@ -471,19 +473,26 @@ struct Consistency {
 /// clock that runs 0.92× true time (the shared 2014 ArduPilot logs:
 /// 0.9229–0.9235 by the receiver's own time of week). Timestamps from it
 /// make the GPS position move faster than its velocity integrated over the
-/// stamps, by 8% of the speed: a ramp in every flight. The GPS itself says
-/// how fast the clock runs: over blocks of at least `CLOCK_BLOCK_S`, its
-/// horizontal displacement against its velocity integrated over boot time,
-/// regressed through the origin: `scale = Σ ΔP·ΔV / Σ |ΔV|²`. It is used
-/// once `Σ |ΔV|²` reaches `CLOCK_MIN_SXX` (about 70 m flown), clamped to
-/// `CLOCK_RANGE`, and multiplies every time step of the filter and of the
-/// position–velocity test. A clock error always points along the velocity;
-/// a position fault need not, but a long ramp along a straight leg does, so
-/// blocks inside any fault episode do not count.
+/// stamps, by 8% of the speed: a ramp in every flight.
+///
+/// Where the log carries the receiver's own time (`gps_time`), the rate is
+/// measured against it ([`ReceiverClock`]): exact within seconds of the
+/// first fix, and blind to what the vehicle does. Otherwise the GPS motion
+/// says how fast the clock runs: over blocks of at least `CLOCK_BLOCK_S`,
+/// its horizontal displacement against its velocity integrated over boot
+/// time, regressed through the origin: `scale = Σ ΔP·ΔV / Σ |ΔV|²`. It is
+/// used once `Σ |ΔV|²` reaches `CLOCK_MIN_SXX` (about 70 m flown), clamped
+/// to `CLOCK_RANGE`. A clock error always points along the velocity; a
+/// position fault need not, but a long ramp along a straight leg does, so
+/// blocks inside any fault episode do not count. The rate multiplies every
+/// time step of the filter and of the position–velocity test.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct ClockRate {
-    /// True seconds per boot-clock second.
+    /// True seconds per boot-clock second: the receiver's rate once it has
+    /// one, else the motion-based one.
     scale: f64,
+    /// The motion-based rate.
+    motion: f64,
     sxy: f64,
     sxx: f64,
     /// Block start: boot time (s) and horizontal GPS position (m).
@@ -492,6 +501,8 @@ struct ClockRate {
     dv: [f64; 2],
     /// Boot time of the last epoch observed, s.
     last: Option<f64>,
+    /// The rate against the receiver's own time.
+    receiver: ReceiverClock,
 }
 
 const CLOCK_BLOCK_S: f64 = 5.0;
@@ -499,14 +510,24 @@ const CLOCK_MIN_SXX: f64 = 5.0e3;
 /// m: a block must span at least this much flight to count.
 const CLOCK_MIN_BLOCK_M: f64 = 10.0;
 const CLOCK_RANGE: (f64, f64) = (0.9, 1.15);
-/// Rate errors below 1% are left alone: the clocks this corrects are off by
-/// several percent (8% on the 2014 ArduPilot builds), while the estimate
-/// itself wanders by a fraction of a percent.
+/// Rate errors below 1% are left alone by the motion-based estimate: the
+/// clocks this corrects are off by several percent (8% on the 2014
+/// ArduPilot builds), while that estimate wanders by a fraction of a
+/// percent. (The receiver's estimate uses its own standard error instead.)
 const CLOCK_DEAD_BAND: f64 = 0.01;
 
 impl ClockRate {
     fn new() -> Self {
-        ClockRate { scale: 1.0, sxy: 0.0, sxx: 0.0, start: None, dv: [0.0; 2], last: None }
+        ClockRate { scale: 1.0, motion: 1.0, sxy: 0.0, sxx: 0.0, start: None, dv: [0.0; 2], last: None, receiver: ReceiverClock::default() }
+    }
+
+    /// One fix's receiver time `g` (s, NaN when absent) at boot time `t` s.
+    fn observe_time(&mut self, t: f64, g: f64) {
+        if g.is_nan() {
+            return;
+        }
+        self.receiver.observe(t, g);
+        self.scale = self.receiver.rate().unwrap_or(self.motion);
     }
 
     /// One GPS interval: the previous epoch (boot time `pt` s, position
@@ -533,11 +554,171 @@ impl ClockRate {
                 let k = (self.sxy / self.sxx).clamp(CLOCK_RANGE.0, CLOCK_RANGE.1);
                 // Within the dead band the estimate is GPS noise, not a
                 // clock: correcting by it would only add its error.
-                self.scale = if (k - 1.0).abs() < CLOCK_DEAD_BAND { 1.0 } else { k };
+                self.motion = if (k - 1.0).abs() < CLOCK_DEAD_BAND { 1.0 } else { k };
+                if self.receiver.rate().is_none() {
+                    self.scale = self.motion;
+                }
             }
         }
         self.start = Some((t, [y[0], y[1]]));
         self.dv = [0.0; 2];
+    }
+}
+
+/// The boot clock's rate against the receiver's own time: the slope of
+/// receiver time on boot time, fitted by least squares over runs of
+/// consistent pairs, each run with its own offset, so a week rollover, a
+/// leap second or a receiver that re-synchronised costs one pair, not the
+/// fit. A pair whose receiver time repeats (a duplicated record) is
+/// skipped; one that goes backwards or is more than `RECEIVER_TOL_S` plus
+/// `RECEIVER_TOL_RATE` of the elapsed boot time off the current fit's
+/// prediction (a logger that stalled, a corrupt record) opens a new run.
+/// The rate counts once it has `RECEIVER_MIN_DOF` residual degrees of
+/// freedom; a rate within `RECEIVER_Z` standard errors of 1 (widened to
+/// Student's t for the fit's degrees of freedom, as the standard error is
+/// itself estimated from a few pairs at first) is taken as 1: a true clock
+/// is left alone, and so is a difference its own fit cannot tell from
+/// timestamp jitter.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct ReceiverClock {
+    /// Closed runs' centred sums: Σ(x−x̄)², Σ(x−x̄)(y−ȳ), Σ(y−ȳ)² (s²),
+    /// with x boot time and y receiver time.
+    sxx: f64,
+    sxy: f64,
+    syy: f64,
+    /// Pairs in closed runs that have at least two, and how many such runs.
+    pairs: u64,
+    runs: u64,
+    /// The open run.
+    run: Option<ClockRun>,
+}
+
+/// One run of consistent (boot time, receiver time) pairs: its first pair,
+/// then running means and centred sums of the pairs relative to it
+/// (Welford), so large epochs (GPS seconds ~1e9) lose no precision.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+struct ClockRun {
+    t0: f64,
+    g0: f64,
+    n: u64,
+    mx: f64,
+    my: f64,
+    cxx: f64,
+    cxy: f64,
+    cyy: f64,
+    /// The last pair accepted (boot s, receiver s).
+    last: (f64, f64),
+}
+
+/// s: timestamp jitter a pair may show against the fit (logger stamps are
+/// taken when the record arrives, tens of ms after the fix).
+const RECEIVER_TOL_S: f64 = 0.1;
+/// Share of the elapsed boot time a pair may be off the prediction: the
+/// widest clock error expected before the fit has a rate of its own.
+const RECEIVER_TOL_RATE: f64 = 0.1;
+/// Residual degrees of freedom before the rate is used.
+const RECEIVER_MIN_DOF: u64 = 3;
+/// Standard errors within which a rate is not told from 1.
+const RECEIVER_Z: f64 = 3.0;
+
+/// Student's t quantile over the normal one at the same tail, for `nu`
+/// degrees of freedom (Cornish–Fisher, three terms: within 8% at 3 degrees
+/// of freedom, exact as `nu` grows).
+fn t_over_z(z: f64, nu: f64) -> f64 {
+    let (z3, z5, z7) = (z * z * z, z * z * z * z * z, z * z * z * z * z * z * z);
+    let g1 = (z3 + z) / 4.0;
+    let g2 = (5.0 * z5 + 16.0 * z3 + 3.0 * z) / 96.0;
+    let g3 = (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / 384.0;
+    (z + g1 / nu + g2 / (nu * nu) + g3 / (nu * nu * nu)) / z
+}
+
+impl ClockRun {
+    fn new(t: f64, g: f64) -> Self {
+        ClockRun { t0: t, g0: g, n: 1, mx: 0.0, my: 0.0, cxx: 0.0, cxy: 0.0, cyy: 0.0, last: (t, g) }
+    }
+
+    fn add(&mut self, t: f64, g: f64) {
+        let (x, y) = (t - self.t0, g - self.g0);
+        self.n += 1;
+        let n = self.n as f64;
+        let dx = x - self.mx;
+        let dy = y - self.my;
+        self.mx += dx / n;
+        self.my += dy / n;
+        self.cxx += dx * (x - self.mx);
+        self.cxy += dx * (y - self.my);
+        self.cyy += dy * (y - self.my);
+        self.last = (t, g);
+    }
+}
+
+impl ReceiverClock {
+    /// Sums over closed runs and the open one: (Sxx, Sxy, Syy, residual
+    /// degrees of freedom).
+    fn sums(&self) -> (f64, f64, f64, u64) {
+        let (mut sxx, mut sxy, mut syy, mut pairs, mut runs) = (self.sxx, self.sxy, self.syy, self.pairs, self.runs);
+        if let Some(r) = self.run.filter(|r| r.n >= 2) {
+            (sxx, sxy, syy) = (sxx + r.cxx, sxy + r.cxy, syy + r.cyy);
+            pairs += r.n;
+            runs += 1;
+        }
+        (sxx, sxy, syy, pairs.saturating_sub(runs + 1))
+    }
+
+    /// The fitted slope (receiver s per boot s) and its standard error
+    /// (scaled so that `RECEIVER_Z` of them make Student's t quantile), once
+    /// there are `RECEIVER_MIN_DOF` residual degrees of freedom.
+    fn fit(&self) -> Option<(f64, f64)> {
+        let (sxx, sxy, syy, dof) = self.sums();
+        if dof < RECEIVER_MIN_DOF || sxx <= 0.0 {
+            return None;
+        }
+        let b = sxy / sxx;
+        let sse = (syy - b * sxy).max(0.0);
+        Some((b, libm::sqrt(sse / dof as f64 / sxx) * t_over_z(RECEIVER_Z, dof as f64)))
+    }
+
+    /// The rate to use: the fit, or 1 when 1 is within its noise; None
+    /// before the fit counts or when it is outside any real clock's range.
+    fn rate(&self) -> Option<f64> {
+        let (b, se) = self.fit()?;
+        if !(CLOCK_RANGE.0..=CLOCK_RANGE.1).contains(&b) {
+            return None;
+        }
+        Some(if (b - 1.0).abs() <= RECEIVER_Z * se { 1.0 } else { b })
+    }
+
+    /// One pair: boot time `t` s, receiver time `g` s.
+    fn observe(&mut self, t: f64, g: f64) {
+        let Some(run) = self.run.as_mut() else {
+            self.run = Some(ClockRun::new(t, g));
+            return;
+        };
+        let (lt, lg) = run.last;
+        if g == lg || t <= lt {
+            return; // a repeated record, or two fixes in one log instant
+        }
+        let rate = self.fit().map_or(1.0, |(b, _)| b);
+        let off = g - (lg + rate * (t - lt));
+        if g < lg || off.abs() > RECEIVER_TOL_S + RECEIVER_TOL_RATE * (t - lt) {
+            self.close_run();
+            self.run = Some(ClockRun::new(t, g));
+            return;
+        }
+        if let Some(run) = self.run.as_mut() {
+            run.add(t, g);
+        }
+    }
+
+    /// Fold the open run into the closed sums (a one-pair run has none).
+    fn close_run(&mut self) {
+        if let Some(r) = self.run.take().filter(|r| r.n >= 2) {
+            self.sxx += r.cxx;
+            self.sxy += r.cxy;
+            self.syy += r.cyy;
+            self.pairs += r.n;
+            self.runs += 1;
+        }
     }
 }
 
@@ -579,6 +760,9 @@ impl Consistency {
         // Not while the velocity is withheld: a biased velocity (degraded
         // fix, frozen or zeroed output) would fill the window with its own
         // bias and hold the test up after it clears.
+        // The receiver's own time, when the log has it, measures the clock
+        // whatever the vehicle does (inside episodes too).
+        self.rate.observe_time(t, fix.gps_time);
         match (&fix.vel, self.last_gps) {
             (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
                 if learn_rate {
@@ -1231,7 +1415,7 @@ impl Detector {
     }
 
     /// The learnt boot-clock rate: true seconds per log second (1 until
-    /// learnt, or within 1% of 1).
+    /// learnt, or when 1 is within the estimate's noise).
     pub fn clock_rate(&self) -> f64 {
         self.consistency.rate.scale
     }
@@ -1595,6 +1779,7 @@ const fn range_of(i: usize) -> (f64, f64) {
         17..=19 => (-200.0, 200.0),   // gyro, rad/s
         20..=23 => (-2.0, 2.0),       // quaternion
         24 => (-2000.0, 1e5),         // baro, m
+        26 => (-1e12, 1e12),          // gps_time, s
         _ => (f64::NEG_INFINITY, f64::INFINITY),
     }
 }
@@ -1619,6 +1804,8 @@ fn row_is_plainly_valid(s: &Sample) -> bool {
         c == 0 || c as usize == n
     };
     ok &= !s.label.is_infinite();
+    const GT: (f64, f64) = range_of(26);
+    ok &= s.gps_time.is_nan() | ((s.gps_time >= GT.0) & (s.gps_time <= GT.1));
     ok && group(1, 3) && group(4, 3) && group(7, 3) && group(14, 3) && group(17, 3) && group(20, 4)
 }
 
@@ -1684,13 +1871,13 @@ mod tests {
         #[test]
         fn fast_validation_agrees_with_the_detailed_checks(
             present in proptest::collection::vec(any::<bool>(), 8),
-            vals in proptest::collection::vec(-1.0f64..1.0, 26),
-            edits in proptest::collection::vec((0..26usize, 0..7usize), 0..4),
+            vals in proptest::collection::vec(-1.0f64..1.0, 27),
+            edits in proptest::collection::vec((0..27usize, 0..7usize), 0..4),
         ) {
             let mut s = Sample::at(10.0);
             // Groups: lat/lon/alt, pn/pe/pd, v, accel, gyro, quaternion, then
-            // single columns fix..epv and baro, label.
-            let groups: [&[usize]; 8] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23], &[10, 11, 12, 13], &[24, 25]];
+            // single columns fix..epv and baro, label, gps_time.
+            let groups: [&[usize]; 8] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23], &[10, 11, 12, 13], &[24, 25, 26]];
             for (g, cols) in groups.iter().enumerate() {
                 if present[g] {
                     for &c in cols.iter() {
@@ -1974,5 +2161,76 @@ mod tests {
             prev = Some((t, p, v));
         }
         assert!((r.scale - 1.0).abs() < 0.003, "{}", r.scale);
+    }
+    /// Fixes at 5 Hz for `secs` true s: boot time `boot + rate × true` plus
+    /// ±`jitter` s of logger stamp jitter, receiver time to the ms on a GPS
+    /// seconds epoch; `edit` may change or drop each pair (true s, boot s,
+    /// receiver s). Returns the clock after every pair.
+    fn receiver_run(rate: f64, secs: f64, jitter: f64, mut edit: impl FnMut(f64, f64, f64) -> Option<(f64, f64)>) -> Vec<(f64, f64)> {
+        let mut rng = crate::rng::Rng::new(7);
+        let mut c = ClockRate::new();
+        let mut out = vec![];
+        let mut last_t = f64::NEG_INFINITY;
+        for k in 0..(secs * 5.0) as usize {
+            let tt = 0.2 * k as f64;
+            let t = (30.0 + rate * tt + jitter * (2.0 * rng.uniform() - 1.0)).max(last_t);
+            let g = 1.3e9 + (tt * 1e3).round() / 1e3;
+            if let Some((t, g)) = edit(tt, t, g) {
+                last_t = t;
+                c.observe_time(t, g);
+                out.push((tt, c.scale));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn the_receivers_time_gives_a_093_or_097_clock_within_01_percent_in_10_s() {
+        for rate in [0.93, 0.97] {
+            let run = receiver_run(rate, 10.0, 0.01, |_, t, g| Some((t, g)));
+            let (tt, k) = *run.last().unwrap();
+            assert!(tt < 10.0 && (k * rate - 1.0).abs() < 1e-3, "rate {rate}: scale {k} after {tt} s");
+            // Usable within 2 s of the first fix already (to 0.5%).
+            let k2 = run.iter().find(|(tt, _)| *tt >= 2.0).unwrap().1;
+            assert!((k2 * rate - 1.0).abs() < 5e-3, "rate {rate}: scale {k2} after 2 s");
+        }
+        // Without gps_time nothing is learnt from it; the rate stays 1.
+        let mut c = ClockRate::new();
+        c.observe_time(1.0, f64::NAN);
+        assert!(c.receiver.run.is_none() && c.scale == 1.0);
+    }
+
+    #[test]
+    fn a_true_clock_is_left_at_exactly_1() {
+        for secs in [3.0, 10.0, 300.0] {
+            let run = receiver_run(1.0, secs, 0.01, |_, t, g| Some((t, g)));
+            assert_eq!(run.last().unwrap().1, 1.0, "after {secs} s");
+        }
+        // Jitter alone never moves it: every scale along a 300 s flight is 1.
+        let r = receiver_run(1.0, 300.0, 0.03, |_, t, g| Some((t, g))); let bad: Vec<_> = r.iter().filter(|(_, k)| *k != 1.0).collect(); assert!(bad.is_empty(), "{} {:?}", bad.len(), &bad[..bad.len().min(20)]);
+    }
+
+    #[test]
+    fn rollovers_repeats_stalls_and_corrupt_receiver_times_do_not_corrupt_the_rate() {
+        let rate = 0.923;
+        let run = receiver_run(rate, 200.0, 0.01, |tt, t, g| match tt {
+            // A week rollover: time of week back to 0 at 40 s.
+            _ if tt >= 40.0 => Some((t, g - 1.3e9 - 40.0 + if tt >= 120.0 { 1.0 } else { 0.0 })),
+            // The receiver repeats its record (same time, later stamp).
+            _ if (20.0..22.0).contains(&tt) => Some((t, 1.3e9 + 20.0)),
+            // One corrupt time, ahead and behind.
+            _ if (25.0..25.1).contains(&tt) => Some((t, g + 3600.0)),
+            _ if (26.0..26.1).contains(&tt) => Some((t, g - 0.7)),
+            // The logger stalls: boot time jumps 2 s ahead of the receiver.
+            _ if tt >= 30.0 => Some((t + 2.0, g)),
+            _ => Some((t, g)),
+        });
+        // A leap second at 120 s (the +1 above) and the edits: after the
+        // first 10 s the rate never leaves 0.1% of the truth.
+        for (tt, k) in run.iter().filter(|(tt, _)| *tt >= 10.0) {
+            assert!((k * rate - 1.0).abs() < 1e-3, "scale {k} at {tt} s");
+        }
+        let (_, k) = run.last().unwrap();
+        assert!((k * rate - 1.0).abs() < 1e-4, "final scale {k}");
     }
 }

@@ -58,6 +58,10 @@ pub struct Sample {
     pub baro: f64,
     /// Ground truth for evaluation (1 = fault); never read by detectors.
     pub label: f64,
+    /// The receiver's own time of this fix, s, on any epoch (GPS seconds,
+    /// time of week, UTC seconds): only its rate against `t` is used, to
+    /// measure how fast the log's boot clock runs (see `detector::ClockRate`).
+    pub gps_time: f64,
 }
 
 impl Default for Sample {
@@ -67,9 +71,11 @@ impl Default for Sample {
 }
 
 /// Column names in contract order; `Sample::get`/`set` index into this.
-pub const COLUMNS: [&str; 26] = [
+/// `gps_time` is an extension of the contract's columns (an unknown column
+/// to a reader that predates it), so it comes last.
+pub const COLUMNS: [&str; 27] = [
     "t", "lat", "lon", "alt", "pn", "pe", "pd", "vn", "ve", "vd", "fix", "sats", "eph", "epv",
-    "ax", "ay", "az", "gx", "gy", "gz", "qw", "qx", "qy", "qz", "baro", "label",
+    "ax", "ay", "az", "gx", "gy", "gz", "qw", "qx", "qy", "qz", "baro", "label", "gps_time",
 ];
 
 impl Sample {
@@ -79,7 +85,7 @@ impl Sample {
         Sample {
             t, lat: n, lon: n, alt: n, pn: n, pe: n, pd: n, vn: n, ve: n, vd: n, fix: n,
             sats: n, eph: n, epv: n, ax: n, ay: n, az: n, gx: n, gy: n, gz: n, qw: n, qx: n,
-            qy: n, qz: n, baro: n, label: n,
+            qy: n, qz: n, baro: n, label: n, gps_time: n,
         }
     }
 
@@ -91,14 +97,14 @@ impl Sample {
             10 => self.fix, 11 => self.sats, 12 => self.eph, 13 => self.epv, 14 => self.ax,
             15 => self.ay, 16 => self.az, 17 => self.gx, 18 => self.gy, 19 => self.gz,
             20 => self.qw, 21 => self.qx, 22 => self.qy, 23 => self.qz, 24 => self.baro,
-            25 => self.label, _ => f64::NAN,
+            25 => self.label, 26 => self.gps_time, _ => f64::NAN,
         }
     }
 
-    /// Row `j` of 26 columns in [`COLUMNS`] order; a column shorter than
+    /// Row `j` of the columns in [`COLUMNS`] order; a column shorter than
     /// `j + 1` reads as NaN (absent).
     #[inline]
-    pub fn from_columns(c: &[&[f64]; 26], j: usize) -> Self {
+    pub fn from_columns(c: &[&[f64]; COLUMNS.len()], j: usize) -> Self {
         let g = |i: usize| c[i].get(j).copied().unwrap_or(f64::NAN);
         Sample {
             t: g(0),
@@ -127,6 +133,7 @@ impl Sample {
             qz: g(23),
             baro: g(24),
             label: g(25),
+            gps_time: g(26),
         }
     }
 
@@ -139,7 +146,7 @@ impl Sample {
             12 => &mut self.eph, 13 => &mut self.epv, 14 => &mut self.ax, 15 => &mut self.ay,
             16 => &mut self.az, 17 => &mut self.gx, 18 => &mut self.gy, 19 => &mut self.gz,
             20 => &mut self.qw, 21 => &mut self.qx, 22 => &mut self.qy, 23 => &mut self.qz,
-            24 => &mut self.baro, 25 => &mut self.label,
+            24 => &mut self.baro, 25 => &mut self.label, 26 => &mut self.gps_time,
             _ => return,
         };
         *slot = v;
@@ -195,16 +202,27 @@ mod tests {
 
     #[test]
     fn from_columns_reads_every_field_in_column_order() {
-        let cols: Vec<Vec<f64>> = (0..26)
+        let cols: Vec<Vec<f64>> = (0..COLUMNS.len())
             .map(|i| vec![100.0 + i as f64, 200.0 + i as f64])
             .collect();
-        let mut c: [&[f64]; 26] = core::array::from_fn(|i| cols[i].as_slice());
+        let mut c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| cols[i].as_slice());
         let s = Sample::from_columns(&c, 1);
-        for i in 0..26 {
+        for i in 0..COLUMNS.len() {
             assert_eq!(s.get(i), 200.0 + i as f64, "column {}", COLUMNS[i]);
         }
         // A short column is absent, not a panic.
         c[24] = &[];
         assert!(Sample::from_columns(&c, 1).baro.is_nan());
+        // get and set agree on every index, and past the end both do nothing.
+        let mut r = Sample::at(0.0);
+        for i in 0..COLUMNS.len() {
+            r.set(i, 1000.0 + i as f64);
+        }
+        r.set(COLUMNS.len(), 5.0);
+        for i in 0..COLUMNS.len() {
+            assert_eq!(r.get(i), 1000.0 + i as f64, "column {}", COLUMNS[i]);
+        }
+        assert!(r.get(COLUMNS.len()).is_nan());
+        assert_eq!(Sample::column_index("gps_time"), Some(26));
     }
 }

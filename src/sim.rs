@@ -583,7 +583,11 @@ pub fn write_rows(out: &mut String, rows: &[Sample]) {
         ("t", 6), ("lat", 9), ("lon", 9), ("alt", 3), ("vn", 3), ("ve", 3), ("vd", 3), ("fix", 0),
         ("sats", 0), ("eph", 2), ("epv", 2), ("ax", 4), ("ay", 4), ("az", 4), ("gx", 5), ("gy", 5),
         ("gz", 5), ("qw", 7), ("qx", 7), ("qy", 7), ("qz", 7), ("baro", 3), ("label", 0),
+        ("gps_time", 3),
     ];
+    // The receiver-time column only when some row has it, so files without
+    // it are byte for byte what they were before the column existed.
+    let cols = if rows.iter().any(|s| !s.gps_time.is_nan()) { cols } else { &cols[..cols.len() - 1] };
     let header: Vec<&str> = cols.iter().map(|c| c.0).collect();
     let _ = writeln!(out, "{}", header.join(","));
     for s in rows {

@@ -937,6 +937,10 @@ impl Out {
             if week > 0.0 && ms >= 0.0 && (status.is_nan() || status >= 3.0) {
                 self.extras.utc(t, gps_to_unix(week, ms));
             }
+            // The receiver's time, GPS s (time of week alone without a week).
+            if ms >= 0.0 {
+                s.gps_time = if week > 0.0 { week * 604_800.0 } else { 0.0 } + ms * 1e-3;
+            }
         }
         self.flush_gps(sink);
         self.last_gps_t = Some(t);

@@ -735,6 +735,11 @@ impl GpsMap {
             s.ve = val(self.vel[1], d);
             s.vd = val(self.vel[2], d);
         }
+        // The receiver's UTC, s (0 when it has none).
+        let utc = val(self.utc, d);
+        if utc > 0.0 {
+            s.gps_time = utc / 1e6;
+        }
         s
     }
 }
