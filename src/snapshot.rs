@@ -46,8 +46,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// fields grouped into per-stage sub-states (postcard writes fields in
 /// declaration order, so the byte layout moved). 4: each indicator axis
 /// counts the epochs its σ_Δ learnt from, and the position–velocity test
-/// its two scales (fast start).
-pub const VERSION: u32 = 4;
+/// its two scales (fast start). 5: the boot-clock rate's fit against the
+/// receiver's own time (`gps_time`).
+pub const VERSION: u32 = 5;
 
 #[derive(Serialize, Deserialize)]
 struct Header<'a> {
