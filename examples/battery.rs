@@ -208,6 +208,12 @@ fn main() -> Result<(), String> {
     }
     print_fp_sources(&results);
     if a.verbose {
+        let mut by_fp: Vec<(usize, &FlightResult)> = results.iter().map(|r| (r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count(), r)).collect();
+        by_fp.sort_by(|x, y| y.0.cmp(&x.0));
+        println!("\n### Flights with the most false-positive epochs\n");
+        for (n, r) in by_fp.iter().take(25) {
+            println!("- {n} FP: {}", r.flight.describe());
+        }
         println!("\n### Flights\n");
         for r in &results {
             let ev: Vec<String> = r.events.iter().map(|e| format!("{} {:.0}% d={:.1}", battery::kind_key(&e.fault), 100.0 * e.share, e.delay)).collect();

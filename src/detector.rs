@@ -66,6 +66,10 @@ pub mod kind {
     pub const OUTAGE: u8 = 2;
     /// No verdict possible: no GPS fix seen yet (or since a data gap).
     pub const NO_GPS: u8 = 3;
+    /// GPS output frozen: while flying, every fix for longer than an
+    /// outage takes repeated the last new one bit for bit (see
+    /// `Clock::fresh`).
+    pub const STALE: u8 = 4;
 }
 
 /// Per-row output.
@@ -289,11 +293,26 @@ struct Clock {
     gps_dt: f64,
     /// Mean absolute deviation of the GPS interval, s (receiver jitter).
     gps_jitter: f64,
+    /// The last new fix's position and velocity fields, bit for bit.
+    last_fields: Option<[u64; 9]>,
 }
 
 impl Clock {
     fn new() -> Self {
-        Clock { last_t: None, last_fix: None, gps_dt: 0.2, gps_jitter: 0.0 }
+        Clock { last_t: None, last_fix: None, gps_dt: 0.2, gps_jitter: 0.0, last_fields: None }
+    }
+
+    /// Whether a fix row carries a new fix. A receiver measures with noise:
+    /// nine position and velocity fields repeated bit for bit (centimetre
+    /// quantisation at most) are its last output again, not a measurement,
+    /// so such a row counts as silence (`is_outage` decides when silence is
+    /// a fault) rather than as an epoch that agrees perfectly and teaches
+    /// the filter a frozen position.
+    fn fresh(&mut self, s: &Sample) -> bool {
+        let fields = [s.lat, s.lon, s.alt, s.pn, s.pe, s.pd, s.vn, s.ve, s.vd].map(f64::to_bits);
+        let fresh = self.last_fields != Some(fields);
+        self.last_fields = Some(fields);
+        fresh
     }
 
     /// A row at `t` s: the time since the previous row (0 for the first),
@@ -1467,7 +1486,11 @@ impl Detector {
             self.stats.baro_rows += 1;
             self.baro_row(t, s.baro);
         }
-        let mut out = if s.has_fix() { self.gps_epoch(s) } else { self.between_fixes(t, s) };
+        let mut out = if s.has_fix() && self.clock.fresh(s) {
+            self.gps_epoch(s)
+        } else {
+            self.between_fixes(t, s)
+        };
         out.t = t;
         self.last = out;
         out
@@ -1518,14 +1541,15 @@ impl Detector {
     fn between_fixes(&mut self, t: f64, s: &Sample) -> Output {
         let mut o = self.last;
         o.gps_epoch = false;
-        let in_outage = self.last.kind == kind::OUTAGE;
+        let in_outage = matches!(self.last.kind, kind::OUTAGE | kind::STALE);
         if self.clock.is_outage(t, s.reports_no_fix(), in_outage, self.flying(), self.cfg.outage_timeout) {
             o.status = 1;
-            o.kind = kind::OUTAGE;
+            // A repeated fix says the receiver still reports one: frozen.
+            o.kind = if s.has_fix() { kind::STALE } else { kind::OUTAGE };
             o.f = 1.0;
             self.ind.clear_imu();
             self.episode.outage(self.clock.last_fix);
-        } else if o.kind == kind::OUTAGE {
+        } else if matches!(o.kind, kind::OUTAGE | kind::STALE) {
             o.status = 0;
             o.kind = kind::NORMAL;
         }
