@@ -206,7 +206,7 @@ mod tests {
         assert_eq!(
             e,
             format!(
-                "snapshot: version 4 (written by navguard {}) cannot be read by navguard {}, which reads version 5",
+                "snapshot: version 4 (written by navguard {}) cannot be read by navguard {}, which reads version {VERSION}",
                 env!("CARGO_PKG_VERSION"),
                 env!("CARGO_PKG_VERSION")
             )
