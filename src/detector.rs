@@ -2225,6 +2225,17 @@ mod tests {
     }
 
     #[test]
+    fn the_t_quantile_factor_matches_students_table() {
+        // Two-sided 99.73% (z = 3) quantiles of Student's t: 9.22 at 3
+        // degrees of freedom, 5.51 at 5, 3.96 at 10, 3.27 at 30.
+        for (nu, t) in [(3.0, 9.22), (5.0, 5.51), (10.0, 3.96), (30.0, 3.27)] {
+            let got = 3.0 * t_over_z(3.0, nu);
+            assert!((got / t - 1.0).abs() < 0.08, "nu {nu}: {got} against {t}");
+        }
+        assert!((t_over_z(3.0, 1e6) - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
     fn a_true_clock_is_left_at_exactly_1() {
         for secs in [3.0, 10.0, 300.0] {
             let run = receiver_run(1.0, secs, 0.01, |_, t, g| Some((t, g)));
