@@ -47,7 +47,8 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// declaration order, so the byte layout moved). 4: each indicator axis
 /// counts the epochs its σ_Δ learnt from, and the position–velocity test
 /// its two scales (fast start). 5: the receiver clock keeps the last new
-/// fix's fields (a frozen receiver's repeats are not epochs).
+/// fix's fields (a frozen receiver's repeats are not epochs), and the
+/// detector learns the receiver's usual accuracy claim.
 pub const VERSION: u32 = 5;
 
 #[derive(Serialize, Deserialize)]
