@@ -52,6 +52,7 @@ use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
+use crate::track::VelocityTrack;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 pub use crate::model::{has_signature, Model};
@@ -295,6 +296,8 @@ struct ReceiverQuality {
     ln_eph: Option<f64>,
     /// Claims learnt from (saturating): a fast start, as σ_Δ has.
     learnt: u32,
+    /// Consecutive fixes the receiver called degraded, up to the last.
+    degraded_run: u32,
 }
 
 /// Forgetting factor of the usual eph, per learnt fix.
@@ -303,6 +306,8 @@ const QUALITY_ALPHA: f64 = 0.02;
 const QUALITY_DEGRADED: f64 = 2.0;
 /// Largest σ scale: beyond it the fix carries no weight worth modelling.
 const QUALITY_MAX_SCALE: f64 = 100.0;
+/// Degraded fixes in a row before a good claim counts as re-acquisition.
+const QUALITY_RUN: u32 = 3;
 
 impl ReceiverQuality {
     /// How many times worse than usual the receiver calls a fix of `eph` m
@@ -312,6 +317,18 @@ impl ReceiverQuality {
             Some(l) if eph.is_finite() && eph > 0.0 => (eph.ln() - l).exp().clamp(1.0, QUALITY_MAX_SCALE),
             _ => 1.0,
         }
+    }
+
+    /// Whether the receiver, after `QUALITY_RUN` or more fixes it called
+    /// degraded, calls this one usual again: it re-acquired, and its fix is
+    /// a better anchor than an estimate that coasted on weakly weighted
+    /// fixes (whose velocity in particular drifted: the first good epochs
+    /// after a degraded stretch were flagged on the velocity group).
+    fn reacquired(&mut self, eph: f64) -> bool {
+        let degraded = self.scale(eph) >= QUALITY_DEGRADED;
+        let back = !degraded && eph.is_finite() && self.degraded_run >= QUALITY_RUN;
+        self.degraded_run = if degraded { self.degraded_run.saturating_add(1) } else { 0 };
+        back
     }
 
     /// Learn a claim from a fix with a normal verdict. Claims of a degraded
@@ -542,6 +559,8 @@ struct Consistency {
     last_baro: Option<(f64, f64)>,
     /// The boot clock's rate against true time.
     rate: ClockRate,
+    /// The GPS position against its own velocity integrated.
+    track: VelocityTrack,
 }
 
 /// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
@@ -628,6 +647,7 @@ impl Consistency {
             last_gps: None,
             last_baro: None,
             rate: ClockRate::new(),
+            track: VelocityTrack::default(),
         }
     }
 
@@ -664,8 +684,17 @@ impl Consistency {
                 let dtg = (t - pt) * self.rate.scale;
                 let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
                 ind.observe_pv(u, !vel_withheld);
+                // A withheld velocity is suspect: nothing to integrate.
+                if vel_withheld {
+                    self.track.clear();
+                } else {
+                    self.track.step(dtg, y.into(), (*v).into(), pv.into());
+                }
             }
-            _ => ind.clear_pv(),
+            _ => {
+                ind.clear_pv();
+                self.track.clear();
+            }
         }
         self.last_gps = fix.vel.map(|v| (t, y, v));
         // Baro against the GPS altitude (up), with the latest baro sample.
@@ -1528,7 +1557,12 @@ impl Detector {
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
-        let fault = self.episode.open(verdict.fault, &mut self.ind, self.oracle);
+        // Outside any episode, a jump that brings the GPS back onto its own
+        // velocity track ends a position fault the filter had followed (a
+        // slow ramp): re-anchor on the fix, open nothing.
+        let track_return = verdict.fault && !self.oracle && !self.episode.active && self.consistency.track.returned();
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || track_return);
+        let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
         // the fault (or the test would see the learnt error after it ends).
         kf.set_hold_bias(self.episode.imu);
@@ -1540,7 +1574,11 @@ impl Detector {
             res: &res,
             sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
         };
-        let step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
+        let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
+        step.reset |= restart;
+        if !step.fault && !step.reset {
+            self.consistency.track.learn();
+        }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
             kf.reset_to(&fix.y, fix.vel.as_ref());
@@ -1558,7 +1596,10 @@ impl Detector {
         if let Err(e) = fed {
             self.filter_failed(e);
         }
-        self.learn(step.fault, &verdict, &ind);
+        // A restart epoch's indicators are the fault's: nothing to learn.
+        if !restart {
+            self.learn(step.fault, &verdict, &ind);
+        }
         Output {
             t: fix.t,
             status: step.fault as u8,
