@@ -52,6 +52,7 @@ use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
+use crate::track::VelocityTrack;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 pub use crate::model::{has_signature, Model};
@@ -249,6 +250,7 @@ pub struct Detector {
     imu_noise: ImuNoise,
     last_est: LastEstimate,
     consistency: Consistency,
+    quality: ReceiverQuality,
     episode: Episode,
     methods: Methods,
     learning: Learning,
@@ -270,13 +272,86 @@ struct Fix {
     y: Vector3<f64>,
     /// Velocity NED (m/s), when the receiver gives one.
     vel: Option<Vector3<f64>>,
+    /// The receiver's horizontal accuracy claim, m (NaN when absent).
+    eph: f64,
     /// The receiver's own time of the fix, s (NaN when the log has none).
     gps_time: f64,
 }
 
 impl Fix {
     fn new(s: &Sample, anchor: &Anchor) -> Self {
-        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)), gps_time: s.gps_time }
+        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)), eph: s.eph, gps_time: s.gps_time }
+    }
+}
+
+/// The receiver's accuracy claim against its usual one. A receiver that
+/// loses satellites or geometry says so (eph, or HDOP standing in for it,
+/// grows several-fold); a fix it calls `k` times worse than usual is fed to
+/// the filter with `k` times the usual σ, so the epochs of a degraded fix
+/// that pass the tests do not drag the estimate along, and the good fix
+/// after it is not judged against a dragged estimate (battery: 28% of all
+/// false-positive epochs followed a degraded fix). Only a ratio is used: no
+/// receiver's absolute eph is assumed.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct ReceiverQuality {
+    /// Learnt usual ln(eph / 1 m); None until the first claim.
+    ln_eph: Option<f64>,
+    /// Claims learnt from (saturating): a fast start, as σ_Δ has.
+    learnt: u32,
+    /// Consecutive fixes the receiver called degraded, up to the last.
+    degraded_run: u32,
+}
+
+/// Forgetting factor of the usual eph, per learnt fix.
+const QUALITY_ALPHA: f64 = 0.02;
+/// A claim this many times the usual one or more is not learnt as usual.
+const QUALITY_DEGRADED: f64 = 2.0;
+/// Largest σ scale: beyond it the fix carries no weight worth modelling.
+const QUALITY_MAX_SCALE: f64 = 100.0;
+/// Degraded fixes in a row before a good claim counts as re-acquisition.
+const QUALITY_RUN: u32 = 3;
+
+impl ReceiverQuality {
+    /// How many times worse than usual the receiver calls a fix of `eph` m
+    /// (1 when it is no worse, or says nothing).
+    fn scale(&self, eph: f64) -> f64 {
+        match self.ln_eph {
+            Some(l) if eph.is_finite() && eph > 0.0 => (eph.ln() - l).exp().clamp(1.0, QUALITY_MAX_SCALE),
+            _ => 1.0,
+        }
+    }
+
+    /// Whether the receiver, after `QUALITY_RUN` or more fixes it called
+    /// degraded, calls this one usual again: it re-acquired, and its fix is
+    /// a better anchor than an estimate that coasted on weakly weighted
+    /// fixes (whose velocity in particular drifted: the first good epochs
+    /// after a degraded stretch were flagged on the velocity group).
+    fn reacquired(&mut self, eph: f64) -> bool {
+        let degraded = self.scale(eph) >= QUALITY_DEGRADED;
+        let back = !degraded && eph.is_finite() && self.degraded_run >= QUALITY_RUN;
+        self.degraded_run = if degraded { self.degraded_run.saturating_add(1) } else { 0 };
+        back
+    }
+
+    /// Learn a claim from a fix with a normal verdict. Claims of a degraded
+    /// fix are not learnt (past the first few), so the usual level follows
+    /// a receiver that improves at once and one that worsens only slowly.
+    fn learn(&mut self, eph: f64) {
+        if !(eph.is_finite() && eph > 0.0) {
+            return;
+        }
+        let x = eph.ln();
+        let Some(l) = self.ln_eph else {
+            self.ln_eph = Some(x);
+            self.learnt = 1;
+            return;
+        };
+        if self.scale(eph) >= QUALITY_DEGRADED && f64::from(self.learnt) * QUALITY_ALPHA >= 1.0 {
+            return;
+        }
+        let w = QUALITY_ALPHA.max(1.0 / (f64::from(self.learnt) + 1.0));
+        self.ln_eph = Some(l + w * (x - l));
+        self.learnt = self.learnt.saturating_add(1);
     }
 }
 
@@ -486,6 +561,8 @@ struct Consistency {
     last_baro: Option<(f64, f64)>,
     /// The boot clock's rate against true time.
     rate: ClockRate,
+    /// The GPS position against its own velocity integrated.
+    track: VelocityTrack,
 }
 
 /// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
@@ -751,6 +828,7 @@ impl Consistency {
             last_gps: None,
             last_baro: None,
             rate: ClockRate::new(),
+            track: VelocityTrack::default(),
         }
     }
 
@@ -790,8 +868,17 @@ impl Consistency {
                 let dtg = (t - pt) * self.rate.scale;
                 let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
                 ind.observe_pv(u, !vel_withheld);
+                // A withheld velocity is suspect: nothing to integrate.
+                if vel_withheld {
+                    self.track.clear();
+                } else {
+                    self.track.step(dtg, y.into(), (*v).into(), pv.into());
+                }
             }
-            _ => ind.clear_pv(),
+            _ => {
+                ind.clear_pv();
+                self.track.clear();
+            }
         }
         self.last_gps = fix.vel.map(|v| (t, y, v));
         // Baro against the GPS altitude (up), with the latest baro sample.
@@ -1017,11 +1104,12 @@ impl Withheld {
     }
 
     /// The filter update stage: feed the fix's groups that are not
-    /// withheld; the indicator engine learns each fed axis' posterior
-    /// residual. A failed update leaves the rest unfed.
-    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6]) -> Result<(), FilterError> {
+    /// withheld, with σ scaled by `k` (see `ReceiverQuality`); the
+    /// indicator engine learns each fed axis' posterior residual. A failed
+    /// update leaves the rest unfed.
+    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6], k: f64) -> Result<(), FilterError> {
         if !self.gps_pos() {
-            kf.update_position(&fix.y)?;
+            kf.update_position_scaled(&fix.y, k)?;
             let p = kf.position();
             for a in 0..3 {
                 ind.accept(a, prev_r[a], kf.position_var(a), fix.y[a] - p[a]);
@@ -1031,7 +1119,7 @@ impl Withheld {
         }
         match (&fix.vel, self.gps_vel()) {
             (Some(v), false) => {
-                kf.update_velocity(v)?;
+                kf.update_velocity_scaled(v, k)?;
                 let vel = kf.velocity();
                 for a in 0..3 {
                     ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
@@ -1329,6 +1417,7 @@ impl Detector {
             imu_noise: ImuNoise::default(),
             last_est: LastEstimate { pos: Vector3::zeros(), vel: Vector3::zeros(), baro_h: None },
             consistency: Consistency::new(),
+            quality: ReceiverQuality::default(),
             episode: Episode::default(),
             methods: Methods::default(),
             learning: Learning::new(model, cfg.q),
@@ -1652,7 +1741,12 @@ impl Detector {
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
-        let fault = self.episode.open(verdict.fault, &mut self.ind, self.oracle);
+        // Outside any episode, a jump that brings the GPS back onto its own
+        // velocity track ends a position fault the filter had followed (a
+        // slow ramp): re-anchor on the fix, open nothing.
+        let track_return = verdict.fault && !self.oracle && !self.episode.active && self.consistency.track.returned();
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || track_return);
+        let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
         // the fault (or the test would see the learnt error after it ends).
         kf.set_hold_bias(self.episode.imu);
@@ -1664,14 +1758,21 @@ impl Detector {
             res: &res,
             sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
         };
-        let step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
+        let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
+        step.reset |= restart;
+        if !step.fault && !step.reset {
+            self.consistency.track.learn();
+        }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
             kf.reset_to(&fix.y, fix.vel.as_ref());
             Ok(())
         } else {
-            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r)
+            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r, self.quality.scale(fix.eph))
         };
+        if !step.fault {
+            self.quality.learn(fix.eph);
+        }
         self.last_est.set_epoch(kf);
         if step.reset {
             self.reanchored();
@@ -1679,7 +1780,10 @@ impl Detector {
         if let Err(e) = fed {
             self.filter_failed(e);
         }
-        self.learn(step.fault, &verdict, &ind);
+        // A restart epoch's indicators are the fault's: nothing to learn.
+        if !restart {
+            self.learn(step.fault, &verdict, &ind);
+        }
         Output {
             t: fix.t,
             status: step.fault as u8,
@@ -1880,6 +1984,27 @@ fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn receiver_quality_scales_by_the_ratio_and_does_not_learn_a_degraded_fix() {
+        let mut q = ReceiverQuality::default();
+        assert_eq!(q.scale(7.0), 1.0, "nothing learnt: no scale");
+        for _ in 0..100 {
+            q.learn(1.2);
+        }
+        assert!((q.scale(6.0) - 5.0).abs() < 1e-9 && q.scale(0.6) == 1.0 && q.scale(f64::NAN) == 1.0);
+        // A long degraded stretch that passed the tests is not learnt.
+        for _ in 0..500 {
+            q.learn(8.0);
+        }
+        assert!((q.scale(6.0) - 5.0).abs() < 1e-9, "{}", q.scale(6.0));
+        // A better receiver is followed (forgetting factor 0.02 per fix).
+        for _ in 0..400 {
+            q.learn(0.5);
+        }
+        assert!((q.scale(1.0) - 2.0).abs() < 1e-2, "{}", q.scale(1.0));
+        assert_eq!(q.scale(1e9), 100.0);
+    }
 
     /// A bad or edge value for column `i`: the bounds, just outside them,
     /// the infinities, NaN.

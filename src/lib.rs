@@ -24,6 +24,7 @@ pub mod sample;
 pub mod sim;
 pub mod thresholds;
 pub mod tight;
+pub mod track;
 pub mod snapshot;
 
 #[cfg(target_arch = "wasm32")]

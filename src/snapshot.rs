@@ -47,8 +47,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// declaration order, so the byte layout moved). 4: each indicator axis
 /// counts the epochs its σ_Δ learnt from, and the position–velocity test
 /// its two scales (fast start). 5: the receiver clock keeps the last new
-/// fix's fields (a frozen receiver's repeats are not epochs). 6: the
-/// boot-clock rate's fit against the receiver's own time (`gps_time`).
+/// fix's fields (a frozen receiver's repeats are not epochs), and the
+/// detector learns the receiver's usual accuracy claim. 6: the boot-clock
+/// rate's fit against the receiver's own time (`gps_time`).
 pub const VERSION: u32 = 6;
 
 #[derive(Serialize, Deserialize)]

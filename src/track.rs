@@ -1,0 +1,176 @@
+//! The GPS position against its own velocity track.
+//!
+//! `d = y − ∫v dt`: the receiver's position minus its Doppler velocity
+//! integrated (trapezoid, true time). Doppler velocity carries neither a
+//! position-only fault (a step, a ramp) nor the slow wander of the position
+//! error, and its white noise integrates to centimetres over minutes, so on
+//! a healthy receiver `d` only wanders by the position error itself. A
+//! position fault moves `d`; its end moves `d` back.
+//!
+//! The track keeps a slow baseline of `d` and a σ of `d`'s wander about
+//! it, both learnt in flight from normal epochs within 3σ (outliers are
+//! not learnt, so a fault never becomes the baseline). What the detector
+//! asks it: did this epoch's jump bring `d` back inside its wander from far
+//! outside it? That is the end of a position fault that was never flagged
+//! (a slow ramp the filter followed), not the start of a new one.
+use serde::{Deserialize, Serialize};
+
+/// Time constant of the baseline and of σ, s.
+const TAU_S: f64 = 60.0;
+/// Track time before the baseline is trusted, s.
+const MIN_AGE_S: f64 = 30.0;
+/// Floor of σ per axis, m: a centimetre-grade receiver's wander is not a
+/// scale below which a jump of a metre means nothing.
+const SIGMA_FLOOR_M: f64 = 0.3;
+/// Prior σ per axis, m, before any is learnt.
+const SIGMA0_M: f64 = 2.0;
+/// Outside this many σ an epoch is not learnt.
+const LEARN_SIGMAS: f64 = 3.0;
+/// A return: `d` was outside `FAR` σ before the jump and inside `NEAR` σ
+/// after it (norm over the three axes of `(d − base)/σ`).
+const FAR: f64 = 5.0;
+const NEAR: f64 = 2.5;
+/// Outlying this long, the baseline is re-learnt from the current `d`, s:
+/// a receiver whose track moved for good (a re-acquisition) is not judged
+/// against its old one for the rest of the flight.
+const RELEARN_S: f64 = 120.0;
+
+/// See the module docs. Positions in m (NED), times in true s.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct VelocityTrack {
+    /// ∫v dt since the track began, m.
+    integral: [f64; 3],
+    /// `d` at this epoch and at the previous one.
+    d: Option<[f64; 3]>,
+    d_prev: Option<[f64; 3]>,
+    base: [f64; 3],
+    /// Learnt mean square of `d − base` per axis, m².
+    ms: [f64; 3],
+    /// Track time learnt from, s.
+    age: f64,
+    /// Time outlying (beyond `LEARN_SIGMAS`) since the last learnt epoch, s.
+    outlying: f64,
+    /// The last interval's length, s.
+    dt: f64,
+}
+
+impl VelocityTrack {
+    /// Restart (a velocity gap: the integral has nothing to continue).
+    pub fn clear(&mut self) {
+        *self = VelocityTrack::default();
+    }
+
+    /// One GPS interval of `dt` true s: position `y` (m) and velocity `v`
+    /// at its end, `pv` at its start.
+    pub fn step(&mut self, dt: f64, y: [f64; 3], v: [f64; 3], pv: [f64; 3]) {
+        let Some(_) = self.d else {
+            self.integral = y;
+            self.base = [0.0; 3];
+            self.ms = [SIGMA0_M * SIGMA0_M; 3];
+            self.d = Some([0.0; 3]);
+            return;
+        };
+        for a in 0..3 {
+            self.integral[a] += 0.5 * (v[a] + pv[a]) * dt;
+        }
+        self.dt = dt;
+        self.d_prev = self.d;
+        self.d = Some(core::array::from_fn(|a| y[a] - self.integral[a]));
+    }
+
+    fn sigma(&self, a: usize) -> f64 {
+        self.ms[a].sqrt().max(SIGMA_FLOOR_M)
+    }
+
+    /// Norm over the axes of `(x − base)/σ`.
+    fn z(&self, x: &[f64; 3]) -> f64 {
+        (0..3).map(|a| ((x[a] - self.base[a]) / self.sigma(a)).powi(2)).sum::<f64>().sqrt()
+    }
+
+    /// A normal epoch: learn the baseline and σ from it if it lies within
+    /// `LEARN_SIGMAS` (fast start over the first `TAU_S`).
+    pub fn learn(&mut self) {
+        let Some(d) = self.d else { return };
+        let dt = self.dt;
+        if !(dt > 0.0) {
+            return;
+        }
+        let inside = (0..3).all(|a| (d[a] - self.base[a]).abs() <= LEARN_SIGMAS * self.sigma(a));
+        if !inside && self.age >= MIN_AGE_S && self.outlying < RELEARN_S {
+            self.outlying += dt;
+            return;
+        }
+        if self.outlying >= RELEARN_S {
+            self.base = d;
+        }
+        self.outlying = 0.0;
+        let w = (dt / TAU_S).max(dt / (self.age + dt)).min(1.0);
+        self.age += dt;
+        for a in 0..3 {
+            let e = d[a] - self.base[a];
+            self.base[a] += w * e;
+            self.ms[a] += w * (e * e - self.ms[a]);
+        }
+    }
+
+    /// This epoch's jump brought `d` from beyond `FAR` σ of its baseline to
+    /// within `NEAR` σ: the end of a position fault.
+    pub fn returned(&self) -> bool {
+        match (self.d, self.d_prev) {
+            (Some(d), Some(p)) if self.age >= MIN_AGE_S => self.z(&p) > FAR && self.z(&d) < NEAR,
+            _ => false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A track fed `n` epochs of 10 Hz hover whose position error is `e(t)`.
+    fn run(track: &mut VelocityTrack, t0: usize, n: usize, e: &dyn Fn(f64) -> [f64; 3]) -> Vec<bool> {
+        let dt = 0.1;
+        (t0..t0 + n)
+            .map(|i| {
+                let t = i as f64 * dt;
+                track.step(dt, e(t), [0.0; 3], [0.0; 3]);
+                let r = track.returned();
+                if !r {
+                    track.learn();
+                }
+                r
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_end_of_a_followed_ramp_is_a_return_and_a_step_onset_is_not() {
+        let wander = |t: f64| [0.8 * (t / 13.0).sin(), 0.8 * (t / 17.0).cos(), 1.5 * (t / 11.0).sin()];
+        let mut tr = VelocityTrack::default();
+        assert!(!run(&mut tr, 0, 600, &wander).iter().any(|r| *r), "clean wander read as a return");
+        // A 0.5 m/s ramp north for 40 s, then the GPS back on the truth.
+        let ramp = |t: f64| {
+            let w = wander(t);
+            [w[0] + 0.5 * (t - 60.0), w[1], w[2]]
+        };
+        assert!(!run(&mut tr, 600, 400, &ramp).iter().any(|r| *r));
+        let back = run(&mut tr, 1000, 100, &wander);
+        assert!(back[0] && !back[1..].iter().any(|r| *r), "{back:?}");
+        // A 10 m step east from the clean track: an onset, never a return.
+        let step = |t: f64| {
+            let w = wander(t);
+            [w[0], w[1] + 10.0, w[2]]
+        };
+        assert!(!run(&mut tr, 1100, 300, &step).iter().any(|r| *r));
+    }
+
+    #[test]
+    fn an_outlier_is_not_learnt_until_it_has_lasted_relearn_s() {
+        let mut tr = VelocityTrack::default();
+        run(&mut tr, 0, 600, &|_| [0.0; 3]);
+        run(&mut tr, 600, 100, &|_| [20.0, 0.0, 0.0]);
+        assert_eq!(tr.base, [0.0; 3], "a 10 s outlier moved the baseline");
+        run(&mut tr, 700, 1300, &|_| [20.0, 0.0, 0.0]);
+        assert!((tr.base[0] - 20.0).abs() < 0.1, "{:?}", tr.base);
+    }
+}

@@ -1,0 +1,32 @@
+//! The GPS position against its own velocity track (src/track.rs): a jump
+//! that brings the position back onto its Doppler velocity integrated, from
+//! far off it, ends a position fault the filter had followed; it opens no
+//! new interval (issue 14, mechanism 1: "when the GPS returns to the truth,
+//! that return is flagged as a new fault").
+#![cfg(not(target_arch = "wasm32"))]
+
+use navguard::battery::{self, Flight, Split};
+use navguard::{Config, Detector};
+
+/// GPS epochs flagged in the `len` s after the flight's first fault ends.
+fn flagged_after(f: &Flight, len: f64) -> usize {
+    let ft = f.faults[0];
+    let rows = battery::simulate(f);
+    let mut det = Detector::new(Config::default()).unwrap();
+    rows.iter()
+        .map(|s| (s, det.push(s).unwrap().status))
+        .filter(|(s, st)| !s.label.is_nan() && s.t >= ft.end_log && s.t < ft.end_log + len && *st != 0)
+        .count()
+}
+
+/// Regression: battery tune #148 (hover, 10 Hz GPS, white σ 1.6 m, true
+/// clock): an 87 s vertical ramp at 0.87 m/s was followed by the filter
+/// (the vertical σ learnt 5 m), and the GPS's 70 m return to the truth was
+/// flagged for 60 s as a step.
+#[test]
+fn the_return_after_a_followed_vertical_ramp_opens_no_interval() {
+    let f = Flight::draw(Split::Tune, 148);
+    assert_eq!((f.faults[0].kind.name(), f.clock.rate), ("ramp", 1.0));
+    let n = flagged_after(&f, 60.0);
+    assert!(n <= 10, "{n} epochs flagged in the 60 s after the ramp");
+}
