@@ -316,7 +316,7 @@ impl ReceiverQuality {
     /// (1 when it is no worse, or says nothing).
     fn scale(&self, eph: f64) -> f64 {
         match self.ln_eph {
-            Some(l) if eph.is_finite() && eph > 0.0 => (eph.ln() - l).exp().clamp(1.0, QUALITY_MAX_SCALE),
+            Some(l) if eph.is_finite() && eph > 0.0 => libm::exp(libm::log(eph) - l).clamp(1.0, QUALITY_MAX_SCALE),
             _ => 1.0,
         }
     }
@@ -340,7 +340,7 @@ impl ReceiverQuality {
         if !(eph.is_finite() && eph > 0.0) {
             return;
         }
-        let x = eph.ln();
+        let x = libm::log(eph);
         let Some(l) = self.ln_eph else {
             self.ln_eph = Some(x);
             self.learnt = 1;
