@@ -601,6 +601,8 @@ struct ClockRate {
     receiver: ReceiverClock,
 }
 
+/// Longest GPS gap the velocity track integrates across, s.
+const TRACK_MAX_GAP_S: f64 = 3.0;
 const CLOCK_BLOCK_S: f64 = 5.0;
 const CLOCK_MIN_SXX: f64 = 5.0e3;
 /// m: a block must span at least this much flight to count.
@@ -874,6 +876,11 @@ impl Consistency {
                 } else {
                     self.track.step(dtg, y.into(), (*v).into(), pv.into());
                 }
+            }
+            // A dropped record or two: the track integrates across the gap.
+            (Some(v), Some((pt, _, pv))) if !vel_withheld && t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S => {
+                ind.clear_pv();
+                self.track.step((t - pt) * self.rate.scale, y.into(), (*v).into(), pv.into());
             }
             _ => {
                 ind.clear_pv();

@@ -30,3 +30,28 @@ fn the_return_after_a_followed_vertical_ramp_opens_no_interval() {
     let n = flagged_after(&f, 60.0);
     assert!(n <= 10, "{n} epochs flagged in the 60 s after the ramp");
 }
+
+/// The track integrates across a logger's dropped GPS records (up to 3 s):
+/// with 1.2 s of records dropped every 20 s it used to restart at every
+/// drop, never lived the 30 s its baseline needs, and the return after
+/// tune #148's ramp was flagged again.
+#[test]
+fn dropped_records_do_not_restart_the_track() {
+    let f = Flight::draw(Split::Tune, 148);
+    let ft = f.faults[0];
+    let mut rows = battery::simulate(&f);
+    let mut k = 0;
+    for s in rows.iter_mut().filter(|s| !s.label.is_nan()) {
+        k += 1;
+        if k % 200 < 12 {
+            (s.lat, s.lon, s.alt, s.vn, s.ve, s.vd, s.label) = (f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN, f64::NAN);
+        }
+    }
+    let mut det = Detector::new(Config::default()).unwrap();
+    let n = rows
+        .iter()
+        .map(|s| (s, det.push(s).unwrap().status))
+        .filter(|(s, st)| !s.label.is_nan() && s.t >= ft.end_log && s.t < ft.end_log + 60.0 && *st != 0)
+        .count();
+    assert!(n <= 10, "{n} epochs flagged in the 60 s after the ramp");
+}
