@@ -11,6 +11,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+pub use crate::error::{LogError, LogPos};
 use crate::sample::Sample;
 
 pub mod csv;
@@ -281,14 +282,14 @@ impl Window {
 }
 
 /// Read any supported log, recognised by content (not by file name).
-pub fn read_any(bytes: &[u8]) -> Result<LogData, String> {
+pub fn read_any(bytes: &[u8]) -> Result<LogData, LogError> {
     if ulog::is_ulog(bytes) {
         return ulog::read_ulog(bytes);
     }
     if dataflash::is_dataflash(bytes) {
         return dataflash::read_dataflash(bytes);
     }
-    csv::read_csv(bytes).map_err(|e| format!("not a ULog or DataFlash log, and not a navlog CSV: {e}"))
+    csv::read_csv(bytes).map_err(LogError::unrecognised)
 }
 
 /// What a file is, from its first bytes; `None` while too few bytes are in
