@@ -135,6 +135,7 @@ impl Default for DataflashStream {
 }
 
 impl DataflashStream {
+    /// A reader at the start of a file (only the built-in `FMT` is known).
     pub fn new() -> Self {
         let mut types: Vec<Option<Layout>> = (0..256).map(|_| None).collect();
         if let Some(slot) = types.get_mut(usize::from(FMT_TYPE)) {
@@ -155,6 +156,7 @@ impl DataflashStream {
         self.win.held_bytes() + self.out.emit.held_bytes()
     }
 
+    /// The next chunk of the file (any size); rows that are final go to `sink`.
     pub fn feed(&mut self, chunk: &[u8], sink: &mut dyn RowSink) {
         self.win.push(chunk);
         self.run(false, sink);

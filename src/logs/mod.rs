@@ -42,11 +42,17 @@ pub struct LogData {
 /// its rows (they went to the sink).
 #[derive(Clone, Debug, Default)]
 pub struct LogSummary {
+    /// "csv", "ulog" or "dataflash".
     pub format: &'static str,
+    /// Vehicle and log metadata (key, value).
     pub meta: Vec<(String, String)>,
+    /// Things the reader coped with.
     pub warnings: Vec<String>,
+    /// Detector inputs the log lacks: any of "gps", "imu", "attitude", "baro".
     pub missing: Vec<String>,
+    /// Message counts per topic or message type.
     pub topic_counts: Vec<(String, u64)>,
+    /// Receiver-quality kind, UTC time, flight modes, autopilot messages.
     pub extras: extras::Extras,
 }
 
@@ -59,6 +65,7 @@ impl LogSummary {
 
 /// Where a streaming reader puts its rows, in time order.
 pub trait RowSink {
+    /// Take the next row (rows come in time order).
     fn row(&mut self, s: &Sample);
 }
 
@@ -144,6 +151,7 @@ impl<T> Default for Reorder<T> {
 }
 
 impl<T> Reorder<T> {
+    /// An empty buffer that holds at most `cap` rows.
     pub fn new(cap: usize) -> Self {
         Reorder { heap: BinaryHeap::new(), slots: Vec::new(), free: Vec::new(), cap: cap.max(1), seq: 0, last: None, late: 0 }
     }
@@ -233,6 +241,7 @@ impl<T> Reorder<T> {
         self.heap.len()
     }
 
+    /// Nothing held.
     pub fn is_empty(&self) -> bool {
         self.heap.is_empty()
     }
@@ -313,8 +322,11 @@ pub fn sniff(head: &[u8], at_end: bool) -> Option<Format> {
 /// The three input formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
+    /// A navlog CSV (contract §1).
     Csv,
+    /// A PX4 ULog file.
     Ulog,
+    /// An ArduPilot DataFlash (`.bin`) log.
     Dataflash,
 }
 
