@@ -206,7 +206,14 @@ fn main() -> Result<(), String> {
             println!("{}", row_md(r));
         }
     }
+    print_fp_sources(&results);
     if a.verbose {
+        let mut by_fp: Vec<(usize, &FlightResult)> = results.iter().map(|r| (r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count(), r)).collect();
+        by_fp.sort_by(|x, y| y.0.cmp(&x.0));
+        println!("\n### Flights with the most false-positive epochs\n");
+        for (n, r) in by_fp.iter().take(25) {
+            println!("- {n} FP: {}", r.flight.describe());
+        }
         println!("\n### Flights\n");
         for r in &results {
             let ev: Vec<String> = r.events.iter().map(|e| format!("{} {:.0}% d={:.1}", battery::kind_key(&e.fault), 100.0 * e.share, e.delay)).collect();
@@ -214,4 +221,38 @@ fn main() -> Result<(), String> {
         }
     }
     Ok(())
+}
+
+/// Where the false-positive epochs lie: on clean flights, before a faulty
+/// flight's first fault, within `AFTER_WINDOW` s after a fault ends, or
+/// later. Says which mechanism the false-alarm rate is made of.
+fn print_fp_sources(results: &[FlightResult]) {
+    let mut n = [0u64; 4];
+    // After-fault FPs by the kind of the last fault that ended before them.
+    let mut by_kind: std::collections::BTreeMap<&'static str, [u64; 2]> = Default::default();
+    let only_true = std::env::var("FP_TRUE_CLOCK").is_ok();
+    for r in results.iter().filter(|r| !only_true || r.flight.clock.rate == 1.0) {
+        let f = &r.flight;
+        for e in r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0) {
+            let last = f.faults.iter().filter(|ft| e.t >= ft.end_log).max_by(|a, b| a.end_log.total_cmp(&b.end_log));
+            let slot = if f.faults.is_empty() {
+                0
+            } else if f.faults.iter().all(|ft| e.t < ft.start_log) {
+                1
+            } else if last.is_some_and(|ft| e.t < ft.end_log + battery::AFTER_WINDOW * f.clock.rate) {
+                2
+            } else {
+                3
+            };
+            n[slot] += 1;
+            if let (Some(ft), 2 | 3) = (last, slot) {
+                by_kind.entry(ft.kind.name()).or_default()[slot - 2] += 1;
+            }
+        }
+    }
+    let total = n.iter().sum::<u64>().max(1) as f64;
+    println!("\n### False-positive epochs by where they lie\n\n| clean flights | before the first fault | ≤ {} s after a fault | later | total |\n|---|---|---|---|---|", battery::AFTER_WINDOW);
+    let cell = |k: u64| format!("{k} ({:.0}%)", 100.0 * k as f64 / total);
+    println!("| {} | {} | {} | {} | {} |", cell(n[0]), cell(n[1]), cell(n[2]), cell(n[3]), n.iter().sum::<u64>());
+    println!("\nAfter a fault, by the kind of the fault that ended last (≤ {} s / later): {}", battery::AFTER_WINDOW, by_kind.iter().map(|(k, v)| format!("{k} {}/{}", v[0], v[1])).collect::<Vec<_>>().join(", "));
 }

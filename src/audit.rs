@@ -23,7 +23,8 @@ pub struct FaultInterval {
     pub start: f64,
     /// Boot-clock seconds of the last flagged row.
     pub end: f64,
-    /// "gps_outage" or "residual".
+    /// "gps_outage" (no fix), "gps_stale" (the receiver repeated its last
+    /// fix bit for bit: frozen output) or "residual".
     pub kind: &'static str,
     /// Largest F-indicator inside.
     pub peak_f: f64,
@@ -93,7 +94,7 @@ pub fn severity(kind: &str, unit: &str, peak_offset: Option<f64>, duration_s: f6
         "m/s" => (2.0, 0.5),
         _ => (10.0, 3.0),
     };
-    let off = if kind == "gps_outage" { None } else { peak_offset };
+    let off = if matches!(kind, "gps_outage" | "gps_stale") { None } else { peak_offset };
     if duration_s >= 30.0 || off.is_some_and(|x| x >= high) {
         "high"
     } else if duration_s >= 5.0 || off.is_some_and(|x| x >= medium) {
@@ -736,11 +737,16 @@ fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Ou
         }
         return;
     }
-    let kind_name = if o.kind == kind::OUTAGE { "gps_outage" } else { "residual" };
+    let no_fix = matches!(o.kind, kind::OUTAGE | kind::STALE);
+    let kind_name = match o.kind {
+        kind::OUTAGE => "gps_outage",
+        kind::STALE => "gps_stale",
+        _ => "residual",
+    };
     let ind = det.indicators();
-    let driver = if o.kind == kind::OUTAGE { "none" } else { ind.r_driver().and_then(|g| DRIVER_NAMES.get(g).copied()).unwrap_or("none") };
+    let driver = if no_fix { "none" } else { ind.r_driver().and_then(|g| DRIVER_NAMES.get(g).copied()).unwrap_or("none") };
     // R is ≈1 when clean and C ≈ 0.2: compare relative excess.
-    let indicator = if o.kind == kind::OUTAGE { "none" } else if (o.c - 0.2) / 0.8 > (o.r - 1.0) / 4.0 { "C" } else { "R" };
+    let indicator = if no_fix { "none" } else if (o.c - 0.2) / 0.8 > (o.r - 1.0) / 4.0 { "C" } else { "R" };
     let (offset, unit) = offset_of(driver, &det.residuals());
     match open {
         Some(iv) if iv.kind == kind_name => {

@@ -66,6 +66,10 @@ pub mod kind {
     pub const OUTAGE: u8 = 2;
     /// No verdict possible: no GPS fix seen yet (or since a data gap).
     pub const NO_GPS: u8 = 3;
+    /// GPS output frozen: while flying, every fix for longer than an
+    /// outage takes repeated the last new one bit for bit (see
+    /// `Clock::fresh`).
+    pub const STALE: u8 = 4;
 }
 
 /// Per-row output.
@@ -245,6 +249,7 @@ pub struct Detector {
     imu_noise: ImuNoise,
     last_est: LastEstimate,
     consistency: Consistency,
+    quality: ReceiverQuality,
     episode: Episode,
     methods: Methods,
     learning: Learning,
@@ -266,11 +271,68 @@ struct Fix {
     y: Vector3<f64>,
     /// Velocity NED (m/s), when the receiver gives one.
     vel: Option<Vector3<f64>>,
+    /// The receiver's horizontal accuracy claim, m (NaN when absent).
+    eph: f64,
 }
 
 impl Fix {
     fn new(s: &Sample, anchor: &Anchor) -> Self {
-        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)) }
+        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)), eph: s.eph }
+    }
+}
+
+/// The receiver's accuracy claim against its usual one. A receiver that
+/// loses satellites or geometry says so (eph, or HDOP standing in for it,
+/// grows several-fold); a fix it calls `k` times worse than usual is fed to
+/// the filter with `k` times the usual σ, so the epochs of a degraded fix
+/// that pass the tests do not drag the estimate along, and the good fix
+/// after it is not judged against a dragged estimate (battery: 28% of all
+/// false-positive epochs followed a degraded fix). Only a ratio is used: no
+/// receiver's absolute eph is assumed.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct ReceiverQuality {
+    /// Learnt usual ln(eph / 1 m); None until the first claim.
+    ln_eph: Option<f64>,
+    /// Claims learnt from (saturating): a fast start, as σ_Δ has.
+    learnt: u32,
+}
+
+/// Forgetting factor of the usual eph, per learnt fix.
+const QUALITY_ALPHA: f64 = 0.02;
+/// A claim this many times the usual one or more is not learnt as usual.
+const QUALITY_DEGRADED: f64 = 2.0;
+/// Largest σ scale: beyond it the fix carries no weight worth modelling.
+const QUALITY_MAX_SCALE: f64 = 100.0;
+
+impl ReceiverQuality {
+    /// How many times worse than usual the receiver calls a fix of `eph` m
+    /// (1 when it is no worse, or says nothing).
+    fn scale(&self, eph: f64) -> f64 {
+        match self.ln_eph {
+            Some(l) if eph.is_finite() && eph > 0.0 => (eph.ln() - l).exp().clamp(1.0, QUALITY_MAX_SCALE),
+            _ => 1.0,
+        }
+    }
+
+    /// Learn a claim from a fix with a normal verdict. Claims of a degraded
+    /// fix are not learnt (past the first few), so the usual level follows
+    /// a receiver that improves at once and one that worsens only slowly.
+    fn learn(&mut self, eph: f64) {
+        if !(eph.is_finite() && eph > 0.0) {
+            return;
+        }
+        let x = eph.ln();
+        let Some(l) = self.ln_eph else {
+            self.ln_eph = Some(x);
+            self.learnt = 1;
+            return;
+        };
+        if self.scale(eph) >= QUALITY_DEGRADED && f64::from(self.learnt) * QUALITY_ALPHA >= 1.0 {
+            return;
+        }
+        let w = QUALITY_ALPHA.max(1.0 / (f64::from(self.learnt) + 1.0));
+        self.ln_eph = Some(l + w * (x - l));
+        self.learnt = self.learnt.saturating_add(1);
     }
 }
 
@@ -287,11 +349,26 @@ struct Clock {
     gps_dt: f64,
     /// Mean absolute deviation of the GPS interval, s (receiver jitter).
     gps_jitter: f64,
+    /// The last new fix's position and velocity fields, bit for bit.
+    last_fields: Option<[u64; 9]>,
 }
 
 impl Clock {
     fn new() -> Self {
-        Clock { last_t: None, last_fix: None, gps_dt: 0.2, gps_jitter: 0.0 }
+        Clock { last_t: None, last_fix: None, gps_dt: 0.2, gps_jitter: 0.0, last_fields: None }
+    }
+
+    /// Whether a fix row carries a new fix. A receiver measures with noise:
+    /// nine position and velocity fields repeated bit for bit (centimetre
+    /// quantisation at most) are its last output again, not a measurement,
+    /// so such a row counts as silence (`is_outage` decides when silence is
+    /// a fault) rather than as an epoch that agrees perfectly and teaches
+    /// the filter a frozen position.
+    fn fresh(&mut self, s: &Sample) -> bool {
+        let fields = [s.lat, s.lon, s.alt, s.pn, s.pe, s.pd, s.vn, s.ve, s.vd].map(f64::to_bits);
+        let fresh = self.last_fields != Some(fields);
+        self.last_fields = Some(fields);
+        fresh
     }
 
     /// A row at `t` s: the time since the previous row (0 for the first),
@@ -814,11 +891,12 @@ impl Withheld {
     }
 
     /// The filter update stage: feed the fix's groups that are not
-    /// withheld; the indicator engine learns each fed axis' posterior
-    /// residual. A failed update leaves the rest unfed.
-    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6]) -> Result<(), FilterError> {
+    /// withheld, with σ scaled by `k` (see `ReceiverQuality`); the
+    /// indicator engine learns each fed axis' posterior residual. A failed
+    /// update leaves the rest unfed.
+    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6], k: f64) -> Result<(), FilterError> {
         if !self.gps_pos() {
-            kf.update_position(&fix.y)?;
+            kf.update_position_scaled(&fix.y, k)?;
             let p = kf.position();
             for a in 0..3 {
                 ind.accept(a, prev_r[a], kf.position_var(a), fix.y[a] - p[a]);
@@ -828,7 +906,7 @@ impl Withheld {
         }
         match (&fix.vel, self.gps_vel()) {
             (Some(v), false) => {
-                kf.update_velocity(v)?;
+                kf.update_velocity_scaled(v, k)?;
                 let vel = kf.velocity();
                 for a in 0..3 {
                     ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
@@ -1126,6 +1204,7 @@ impl Detector {
             imu_noise: ImuNoise::default(),
             last_est: LastEstimate { pos: Vector3::zeros(), vel: Vector3::zeros(), baro_h: None },
             consistency: Consistency::new(),
+            quality: ReceiverQuality::default(),
             episode: Episode::default(),
             methods: Methods::default(),
             learning: Learning::new(model, cfg.q),
@@ -1283,7 +1362,11 @@ impl Detector {
             self.stats.baro_rows += 1;
             self.baro_row(t, s.baro);
         }
-        let mut out = if s.has_fix() { self.gps_epoch(s) } else { self.between_fixes(t, s) };
+        let mut out = if s.has_fix() && self.clock.fresh(s) {
+            self.gps_epoch(s)
+        } else {
+            self.between_fixes(t, s)
+        };
         out.t = t;
         self.last = out;
         out
@@ -1334,14 +1417,15 @@ impl Detector {
     fn between_fixes(&mut self, t: f64, s: &Sample) -> Output {
         let mut o = self.last;
         o.gps_epoch = false;
-        let in_outage = self.last.kind == kind::OUTAGE;
+        let in_outage = matches!(self.last.kind, kind::OUTAGE | kind::STALE);
         if self.clock.is_outage(t, s.reports_no_fix(), in_outage, self.flying(), self.cfg.outage_timeout) {
             o.status = 1;
-            o.kind = kind::OUTAGE;
+            // A repeated fix says the receiver still reports one: frozen.
+            o.kind = if s.has_fix() { kind::STALE } else { kind::OUTAGE };
             o.f = 1.0;
             self.ind.clear_imu();
             self.episode.outage(self.clock.last_fix);
-        } else if o.kind == kind::OUTAGE {
+        } else if matches!(o.kind, kind::OUTAGE | kind::STALE) {
             o.status = 0;
             o.kind = kind::NORMAL;
         }
@@ -1462,8 +1546,11 @@ impl Detector {
             kf.reset_to(&fix.y, fix.vel.as_ref());
             Ok(())
         } else {
-            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r)
+            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r, self.quality.scale(fix.eph))
         };
+        if !step.fault {
+            self.quality.learn(fix.eph);
+        }
         self.last_est.set_epoch(kf);
         if step.reset {
             self.reanchored();
@@ -1669,6 +1756,27 @@ fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn receiver_quality_scales_by_the_ratio_and_does_not_learn_a_degraded_fix() {
+        let mut q = ReceiverQuality::default();
+        assert_eq!(q.scale(7.0), 1.0, "nothing learnt: no scale");
+        for _ in 0..100 {
+            q.learn(1.2);
+        }
+        assert!((q.scale(6.0) - 5.0).abs() < 1e-9 && q.scale(0.6) == 1.0 && q.scale(f64::NAN) == 1.0);
+        // A long degraded stretch that passed the tests is not learnt.
+        for _ in 0..500 {
+            q.learn(8.0);
+        }
+        assert!((q.scale(6.0) - 5.0).abs() < 1e-9, "{}", q.scale(6.0));
+        // A better receiver is followed (forgetting factor 0.02 per fix).
+        for _ in 0..400 {
+            q.learn(0.5);
+        }
+        assert!((q.scale(1.0) - 2.0).abs() < 1e-2, "{}", q.scale(1.0));
+        assert_eq!(q.scale(1e9), 100.0);
+    }
 
     /// A bad or edge value for column `i`: the bounds, just outside them,
     /// the infinities, NaN.

@@ -400,7 +400,13 @@ impl Kf {
 
     /// GPS position update (m, NED).
     pub fn update_position(&mut self, y: &Vector3<f64>) -> Result<(), FilterError> {
-        let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v];
+        self.update_position_scaled(y, 1.0)
+    }
+
+    /// GPS position update (m, NED) with the measurement σ multiplied by
+    /// `k` (≥ 1: the receiver says this fix is `k` times worse than usual).
+    pub fn update_position_scaled(&mut self, y: &Vector3<f64>, k: f64) -> Result<(), FilterError> {
+        let r = [self.noise.gps_pos_h, self.noise.gps_pos_h, self.noise.gps_pos_v].map(|r| r * k);
         for i in 0..3 {
             self.scalar_update(&[(IP + i, 1.0)], y[i], r[i] * r[i])?;
         }
@@ -409,7 +415,13 @@ impl Kf {
 
     /// GPS velocity update (m/s, NED).
     pub fn update_velocity(&mut self, y: &Vector3<f64>) -> Result<(), FilterError> {
-        let r = self.noise.gps_vel;
+        self.update_velocity_scaled(y, 1.0)
+    }
+
+    /// GPS velocity update (m/s, NED), σ multiplied by `k` as in
+    /// [`Kf::update_position_scaled`].
+    pub fn update_velocity_scaled(&mut self, y: &Vector3<f64>, k: f64) -> Result<(), FilterError> {
+        let r = self.noise.gps_vel * k;
         for i in 0..3 {
             self.scalar_update(&[(IV + i, 1.0)], y[i], r * r)?;
         }

@@ -46,8 +46,10 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// fields grouped into per-stage sub-states (postcard writes fields in
 /// declaration order, so the byte layout moved). 4: each indicator axis
 /// counts the epochs its σ_Δ learnt from, and the position–velocity test
-/// its two scales (fast start).
-pub const VERSION: u32 = 4;
+/// its two scales (fast start). 5: the receiver clock keeps the last new
+/// fix's fields (a frozen receiver's repeats are not epochs), and the
+/// detector learns the receiver's usual accuracy claim.
+pub const VERSION: u32 = 5;
 
 #[derive(Serialize, Deserialize)]
 struct Header<'a> {
@@ -195,16 +197,16 @@ mod tests {
         v2.extend_from_slice(body);
         let e = Detector::restore(&v2).unwrap_err().to_string();
         assert!(e.contains(&format!("version {}", VERSION + 1)) && e.contains(&format!("reads version {VERSION}")), "{e}");
-        // So is an older one (version 3: the layout before the fast-start
-        // counters), before its body is parsed.
-        let older = Header { version: 3, ..h };
+        // So is an older one (version 4: the layout before the receiver
+        // clock kept the last fix's fields), before its body is parsed.
+        let older = Header { version: 4, ..h };
         let mut v_old = postcard::to_allocvec(&older).unwrap();
         v_old.extend_from_slice(body);
         let e = Detector::restore(&v_old).unwrap_err().to_string();
         assert_eq!(
             e,
             format!(
-                "snapshot: version 3 (written by navguard {}) cannot be read by navguard {}, which reads version 4",
+                "snapshot: version 4 (written by navguard {}) cannot be read by navguard {}, which reads version 5",
                 env!("CARGO_PKG_VERSION"),
                 env!("CARGO_PKG_VERSION")
             )

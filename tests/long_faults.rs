@@ -16,7 +16,9 @@ fn run(kind: FaultKind, magnitude: f64, length: f64, seed: u64) -> (f64, usize, 
     let (mut inside, mut flagged, mut after, mut elsewhere) = (0, 0, 0, 0);
     for s in &rows {
         let o = det.push(s).unwrap();
-        if !o.gps_epoch {
+        // Every row carrying a fix, new or repeated (a frozen receiver's
+        // repeats are not epochs, but they are the fault's rows).
+        if !s.has_fix() {
             continue;
         }
         if s.t >= start && s.t < start + length {
@@ -45,9 +47,42 @@ fn a_60_s_step_is_flagged_throughout_and_its_end_opens_no_new_interval() {
 #[test]
 fn a_60_s_frozen_gps_is_flagged_for_90_percent_of_it() {
     for seed in 1..=3 {
-        let (share, _, _) = run(FaultKind::Frozen, 0.0, 60.0, seed);
-        assert!(share >= 0.90, "seed {seed}: {share}");
+        let (share, after, _) = run(FaultKind::Frozen, 0.0, 60.0, seed);
+        assert!(share >= 0.90 && after <= 10, "seed {seed}: {share}, {after} after");
     }
+}
+
+/// A receiver that repeats its last fix bit for bit is frozen: its rows are
+/// not epochs, and once the repeats outlast an outage's silence bound the
+/// rows are flagged `STALE` (not `OUTAGE`: the receiver still claims a fix).
+/// Regression: a frozen hover (battery tune #88) was accepted for 60 s as a
+/// perfectly steady GPS, and the fresh fix after it opened a 45 s fault.
+#[test]
+fn a_frozen_receiver_is_stale_within_two_seconds_and_its_repeats_teach_nothing() {
+    use navguard::detector::kind;
+    let (start, length) = (100.0, 60.0);
+    let rows = simulate(&Scenario::with_fault(FaultKind::Frozen, 0.0, start, length, 4)).unwrap();
+    let mut det = Detector::new(Config::default()).unwrap();
+    let (mut first_stale, mut epochs_inside, mut kinds_after) = (None, 0, vec![]);
+    for s in &rows {
+        let o = det.push(s).unwrap();
+        let inside = s.t >= start && s.t < start + length;
+        if inside && o.gps_epoch {
+            epochs_inside += 1;
+        }
+        if inside && o.kind == kind::STALE && first_stale.is_none() {
+            first_stale = Some(s.t - start);
+        }
+        if s.t >= start + length && s.t < start + length + 30.0 && o.status != 0 {
+            kinds_after.push(o.kind);
+        }
+    }
+    let delay = first_stale.expect("never flagged stale");
+    assert!(delay <= 2.0, "first stale verdict {delay:.2} s after the freeze");
+    // The first repeat is the only one that could not yet be told apart
+    // from a new fix: at most one epoch inside the freeze.
+    assert!(epochs_inside <= 1, "{epochs_inside} epochs inside the freeze");
+    assert!(kinds_after.iter().all(|k| *k == kind::STALE), "after the freeze: {kinds_after:?}");
 }
 
 #[test]

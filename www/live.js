@@ -15,7 +15,7 @@ const $ = (sel) => document.querySelector(sel);
 const WINDOW_S = 60;                   // rolling plot span (source seconds)
 const DRAW_MS = 250;                   // at most 4 redraws a second
 const FILE_LIMIT = 50 * 1024 * 1024;   // keep replayed logs under 50 MB in IndexedDB
-const KIND_NAME = { 0: 'normal', 1: 'residual fault', 2: 'GPS outage', 3: 'no GPS yet' };
+const KIND_NAME = { 0: 'normal', 1: 'residual fault', 2: 'GPS outage', 3: 'no GPS yet', 4: 'GPS output frozen' };
 const KIND_FILL = { 1: 'rgba(220,38,38,0.13)', 2: 'rgba(217,119,6,0.16)', 3: 'rgba(156,163,175,0.18)' };
 
 let ui = null; // {showError, hideError, readConfig, scenario}
@@ -461,7 +461,7 @@ function render() {
   const last = L.last;
   const v = $('#live-verdict');
   let kind = last ? last.kind : 3;
-  let label = last ? (last.status === 1 ? (last.kind === 2 ? 'GPS outage' : 'Fault') : KIND_NAME[last.kind]) : 'waiting for rows';
+  let label = last ? (last.status === 1 ? (last.kind === 2 || last.kind === 4 ? KIND_NAME[last.kind] : 'Fault') : KIND_NAME[last.kind]) : 'waiting for rows';
   if (last && last.status === 1 && last.kind === 0) kind = 1;
   v.dataset.kind = String(kind);
   v.dataset.status = last ? String(last.status) : '';

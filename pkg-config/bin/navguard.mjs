@@ -217,7 +217,7 @@ async function auditDir(dir, opt) {
     startT: r.report.startT, startUtc: r.report.startUtc ?? null, ephSource: r.report.ephSource,
     gpsRateHz: r.report.gpsRateHz, flaggedGpsEpochFraction: r.report.flaggedGpsEpochFraction,
     residualFaults: faultList(r.report).filter((f) => f.kind === 'residual').length,
-    outages: faultList(r.report).filter((f) => f.kind === 'gps_outage').length,
+    outages: faultList(r.report).filter((f) => f.kind === 'gps_outage' || f.kind === 'gps_stale').length,
     dataGaps: r.report.dataGaps.length, warnings: r.report.warnings, missing: r.report.missing,
     // Every interval (boot-clock s, as in the single-file report), not only counts.
     faults: faultList(r.report), ms: r.ms,

@@ -371,7 +371,7 @@ function verdictBadge(v) {
 
 /** Shaded bands and marks shared by a flight's time plots. */
 function overlays(report, t0, tEnd) {
-  const faults = faultList(report).map((f, i) => ({ start: f.start - t0, end: f.end - t0, fill: f.kind === 'gps_outage' ? 'rgba(255,152,0,.28)' : 'rgba(229,57,53,.28)', title: `interval ${i + 1}: ${f.kind} ${fmtSince(f.start - t0)} - ${fmtSince(f.end - t0)}`, cls: 'fault' }));
+  const faults = faultList(report).map((f, i) => ({ start: f.start - t0, end: f.end - t0, fill: f.kind === 'residual' ? 'rgba(229,57,53,.28)' : 'rgba(255,152,0,.28)', title: `interval ${i + 1}: ${f.kind} ${fmtSince(f.start - t0)} - ${fmtSince(f.end - t0)}`, cls: 'fault' }));
   const modes = (report.modes || []).map((m, i, a) => ({ start: m.t - t0, end: (i + 1 < a.length ? a[i + 1].t : t0 + tEnd) - t0, fill: MODE_FILLS[i % MODE_FILLS.length], title: `mode ${m.mode} from ${fmtSince(m.t - t0)}`, cls: 'mode', name: m.mode }));
   const marks = (report.messages || []).filter((m) => m.level === 'error' || m.level === 'warning').map((m) => ({ t: m.t - t0, title: `${fmtSince(m.t - t0)} ${m.level}: ${m.text}`, cls: m.level }));
   return { shades: [...modes, ...faults], marks };
