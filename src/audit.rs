@@ -21,6 +21,7 @@ use crate::sample::Sample;
 pub struct FaultInterval {
     /// Boot-clock seconds of the first and last flagged row.
     pub start: f64,
+    /// Boot-clock seconds of the last flagged row.
     pub end: f64,
     /// "gps_outage" (no fix), "gps_stale" (the receiver repeated its last
     /// fix bit for bit: frozen output) or "residual".
@@ -31,6 +32,7 @@ pub struct FaultInterval {
     pub driver: &'static str,
     /// Which indicator was further above its clean level at the peak: "R" or "C".
     pub indicator: &'static str,
+    /// Rows inside the interval (all sensors).
     pub rows: u64,
     /// Largest offset of the driving sensor from the filter's prediction
     /// inside the interval (the reference: the estimate coasting on the IMU
@@ -142,7 +144,9 @@ pub const RECONCILE_GAP_S: f64 = 2.0;
 /// A pause in which every sensor stopped.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Gap {
+    /// Boot-clock s of the last row before the pause.
     pub start: f64,
+    /// Boot-clock s of the first row after it.
     pub end: f64,
 }
 
@@ -150,11 +154,17 @@ pub struct Gap {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Report {
+    /// The log format: "csv", "ulog" or "dataflash" (`LogData::format`).
     pub format: &'static str,
+    /// Rows audited.
     pub rows: usize,
+    /// Time from the first row to the last, s.
     pub duration_s: f64,
+    /// GPS epochs the detector judged.
     pub gps_epochs: u64,
+    /// GPS epochs per second of log, Hz.
     pub gps_rate_hz: f64,
+    /// IMU rows per second of log, Hz (0 without an IMU).
     pub imu_rate_hz: f64,
     /// Whether any GPS fix was seen; `false` means no residual verdicts were made.
     pub gps_available: bool,
@@ -162,17 +172,24 @@ pub struct Report {
     pub gps_fix_fraction: f64,
     /// Share of GPS epochs flagged (residual faults).
     pub flagged_gps_epoch_fraction: f64,
+    /// Flagged intervals as the streaming detector gave them (causal).
     pub faults: Vec<FaultInterval>,
     /// `faults` reconciled over the whole log ([`reconcile`]): what a
     /// person reading the log afterwards should count as fault intervals.
     /// `faults` stays the causal verdict, as the streaming `push` gave it.
     pub reconciled: Vec<FaultInterval>,
+    /// Pauses in which every sensor stopped (logging gaps).
     pub data_gaps: Vec<Gap>,
+    /// Detector inputs the log lacks: any of "gps", "imu", "attitude", "baro".
     pub missing: Vec<String>,
+    /// What the reader and the detector coped with (skipped rows, truncation).
     pub warnings: Vec<String>,
+    /// Vehicle and log metadata (key, value) from the reader.
     pub meta: Vec<(String, String)>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// Accuracy, false alarm and misdetection when the log has a `label` column.
     pub metrics: Option<Metrics>,
+    /// The detector's counters at the end of the log.
     pub stats: crate::detector::Stats,
     /// Boot-clock s of the first row: a time minus this is the time since
     /// the log's start, as reports show it.
@@ -208,11 +225,17 @@ impl Report {
 /// Per-row outputs in columns.
 #[derive(Clone, Debug, Default)]
 pub struct Columns {
+    /// Row time, boot-clock s.
     pub t: Vec<f64>,
+    /// Verdict per row: 0 normal, 1 fault.
     pub status: Vec<u8>,
+    /// F-indicator (ANFIS output, or the method's statistic).
     pub f: Vec<f64>,
+    /// R-indicator (residual level).
     pub r: Vec<f64>,
+    /// C-indicator (residual change).
     pub c: Vec<f64>,
+    /// Verdict kind per row (see [`crate::detector::kind`]).
     pub kind: Vec<u8>,
     /// Residuals per axis (see [`Detector::residuals`]), NaN where none.
     pub resid: [Vec<f64>; 7],
@@ -404,6 +427,7 @@ impl Columns {
         self.t.len()
     }
 
+    /// No rows held.
     pub fn is_empty(&self) -> bool {
         self.t.is_empty()
     }
@@ -449,6 +473,7 @@ impl<L: Borrow<LogData>> AuditRun<L> {
         }
     }
 
+    /// Every row of the log has been processed.
     pub fn done(&self) -> bool {
         self.next >= self.log.borrow().samples.len()
     }

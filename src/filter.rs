@@ -15,7 +15,10 @@ use serde::{Deserialize, Serialize};
 
 /// State dimension.
 pub const N: usize = 10;
+/// The state `x`: position NED (m), velocity NED (m/s), accelerometer bias
+/// (body, m/s²), barometer offset (m).
 pub type StateVec = SVector<f64, N>;
+/// An N×N matrix over the state (`P`, `Φ`, `Q`).
 pub type StateMat = SMatrix<f64, N, N>;
 
 /// Standard gravity, m/s², NED down positive.
@@ -37,8 +40,9 @@ pub struct FilterNoise {
     pub accel_bias_rw: f64,
     /// Barometer offset random walk, m per sqrt(s).
     pub baro_rw: f64,
-    /// GPS horizontal / vertical position noise, m.
+    /// GPS horizontal position noise, m.
     pub gps_pos_h: f64,
+    /// GPS vertical position noise, m.
     pub gps_pos_v: f64,
     /// GPS velocity noise, m/s.
     pub gps_vel: f64,
@@ -96,7 +100,9 @@ pub struct ImuInput {
 /// `nu = y - H x⁻` and its variance `S = H P⁻ Hᵀ + R`, per scalar channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Innovation<const M: usize> {
+    /// Innovation `nu = y - H x⁻` per channel (the measurement's unit).
     pub nu: [f64; M],
+    /// Its variance `S = H P⁻ Hᵀ + R` per channel (unit squared).
     pub s: [f64; M],
 }
 
@@ -192,14 +198,17 @@ impl Kf {
         self.hold_bias = hold;
     }
 
+    /// Estimated position NED, m.
     pub fn position(&self) -> Vector3<f64> {
         self.x.fixed_rows::<3>(IP).into_owned()
     }
 
+    /// Estimated velocity NED, m/s.
     pub fn velocity(&self) -> Vector3<f64> {
         self.x.fixed_rows::<3>(IV).into_owned()
     }
 
+    /// Estimated accelerometer bias, body frame, m/s².
     pub fn accel_bias(&self) -> Vector3<f64> {
         self.x.fixed_rows::<3>(IB).into_owned()
     }
@@ -442,6 +451,8 @@ impl Kf {
         self.baro_initialised = false;
     }
 
+    /// Whether the barometer offset has been set from a first baro reading
+    /// (since the start or the last [`Kf::reset_baro`]).
     pub fn baro_initialised(&self) -> bool {
         self.baro_initialised
     }

@@ -7,6 +7,21 @@ use serde::{Deserialize, Serialize};
 
 use crate::anfis::Anfis;
 
+/// The shipped model in postcard (every f64 bit-exact): the model that
+/// serde_json reads from `src/default_model.json` (what `navguard-train`
+/// writes, readable and diffable), stored as binary so that a build without
+/// serde_json (the core wasm module) carries 16 KB instead of 42 KB of JSON
+/// and no JSON parser. `embedded_model_is_the_json_exactly` holds the two
+/// files to each other; `navguard-train` writes both.
+pub const EMBEDDED_MODEL: &[u8] = include_bytes!("default_model.bin");
+
+/// The binary form of a model as shipped: postcard of the model that
+/// `json` (a trained model, as `navguard-train` writes it) parses to.
+pub fn binary_of_json(json: &str) -> Result<Vec<u8>, String> {
+    let m: Model = serde_json::from_str(json).map_err(|e| format!("model JSON: {e}"))?;
+    postcard::to_allocvec(&m).map_err(|e| format!("model: {e}"))
+}
+
 /// A trained model: ANFIS parameters plus the initial databases D1₀, D2₀.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Model {
@@ -23,14 +38,10 @@ pub struct Model {
 
 impl Model {
     /// The model shipped in the crate, made by `cargo run --release --bin navguard-train`.
-    /// Parsed once per process (a few hundred µs), then cloned.
+    /// Decoded once per process from [`EMBEDDED_MODEL`], then cloned.
     pub fn embedded() -> Result<Model, String> {
         static EMBEDDED: std::sync::OnceLock<Result<Model, String>> = std::sync::OnceLock::new();
-        EMBEDDED
-            .get_or_init(|| {
-                serde_json::from_str(include_str!("default_model.json")).map_err(|e| format!("embedded model: {e}"))
-            })
-            .clone()
+        EMBEDDED.get_or_init(|| postcard::from_bytes(EMBEDDED_MODEL).map_err(|e| format!("embedded model: {e}"))).clone()
     }
 
     /// Grid-initialised ANFIS with a plain R ramp, used only to drive the
@@ -72,3 +83,30 @@ pub(crate) fn check_anfis(a: &Anfis) -> Result<(), String> {
     }
 }
 
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The embedded binary is exactly what the JSON parses to (as the crate
+    /// read it before the model shipped in binary), so the detector's
+    /// verdicts did not move. `NAVGUARD_WRITE_MODEL=1 cargo test --release
+    /// --lib embedded_model` rewrites `src/default_model.bin` from the JSON.
+    #[test]
+    fn embedded_model_is_the_json_exactly() {
+        let json = include_str!("default_model.json");
+        let bytes = binary_of_json(json).unwrap();
+        if std::env::var_os("NAVGUARD_WRITE_MODEL").is_some() {
+            std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/src/default_model.bin"), &bytes).unwrap();
+        }
+        assert!(bytes == EMBEDDED_MODEL, "src/default_model.bin differs from src/default_model.json");
+        let from_json: Model = serde_json::from_str(json).unwrap();
+        let shipped = Model::embedded().unwrap();
+        assert_eq!(shipped, from_json);
+        // Bit for bit, not only ==: compare every f64's bits.
+        let bits = |m: &Model| m.d1.iter().chain(m.d2.iter()).flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&shipped), bits(&from_json));
+        assert_eq!(shipped.d1.len(), 500);
+        assert!(shipped.check().is_ok());
+    }
+}

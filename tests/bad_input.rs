@@ -94,6 +94,7 @@ fn unreadable_files_give_one_line_reasons() {
         match read_any(bytes) {
             Ok(log) => assert!(needle.is_empty() && log.samples.is_empty(), "{needle}: expected an error"),
             Err(e) => {
+                let e = e.to_string();
                 assert!(e.contains(needle), "{e} should mention {needle}");
                 assert!(!e.contains('\n'), "one line: {e}");
             }

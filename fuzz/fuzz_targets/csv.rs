@@ -20,9 +20,9 @@ fuzz_target!(|data: &[u8]| {
     let mut r = csv::CsvReader::new();
     let mut rows = Vec::new();
     let chunked = r
-        .feed(&data[..cut], &mut rows)
-        .and_then(|()| r.feed(&data[cut..], &mut rows))
-        .and_then(|()| r.finish(&mut rows));
+        .read_chunk(&data[..cut], &mut rows)
+        .and_then(|()| r.read_chunk(&data[cut..], &mut rows))
+        .and_then(|()| r.read_end(&mut rows));
     match (&whole, &chunked) {
         (Ok(d), Ok(())) => assert_eq!(bits(&d.samples), bits(&rows), "chunked parse differs (cut {cut})"),
         (Err(a), Err(b)) => assert_eq!(a, b, "chunked parse error differs (cut {cut})"),

@@ -1,7 +1,9 @@
 //! Regenerate the embedded default model, or train one from a labelled log.
 //!
 //! `cargo run --release --bin navguard-train` rewrites `src/default_model.json`
-//! from simulated flights (seeds 1000+, never the evaluation seeds).
+//! from simulated flights (seeds 1000+, never the evaluation seeds), and
+//! `src/default_model.bin`, the binary form the crate embeds (postcard of
+//! what the JSON parses to, see `navguard::model::EMBEDDED_MODEL`).
 //! `cargo run --release --bin navguard-train -- --from FILE.csv [--out model.json]`
 //! trains from your own labelled navlog CSV(s) (`label` column, 0/1).
 
@@ -122,9 +124,19 @@ fn main() {
         std::process::exit(2)
     });
     let json = serde_json::to_string(&model).unwrap_or_default();
-    if let Err(e) = std::fs::write(&out, json + "\n") {
+    let json = json + "\n";
+    if let Err(e) = std::fs::write(&out, &json) {
         eprintln!("navguard-train: cannot write {out}: {e}");
         std::process::exit(2);
+    }
+    // The embedded binary is made from the JSON text, as its test checks.
+    if let Some(stem) = out.strip_suffix(".json").filter(|_| from.is_empty()) {
+        let bin = format!("{stem}.bin");
+        let written = navguard::model::binary_of_json(&json).and_then(|b| std::fs::write(&bin, b).map_err(|e| e.to_string()));
+        if let Err(e) = written {
+            eprintln!("navguard-train: cannot write {bin}: {e}");
+            std::process::exit(2);
+        }
     }
     eprintln!("wrote {out}: {}", model.provenance);
 }

@@ -7,6 +7,7 @@
 //! convenience.
 
 use super::LogData;
+use crate::error::{LogError, LogPos};
 use crate::sample::{Sample, COLUMNS};
 
 /// Incremental navlog CSV parser.
@@ -16,11 +17,14 @@ pub struct CsvReader {
     map: Option<Vec<Option<usize>>>,
     partial: Vec<u8>,
     line_no: u64,
+    /// What the reader coped with (unknown columns ignored).
     pub warnings: Vec<String>,
+    /// `#` comment lines before the header (at most 64, 256 characters each).
     pub comments: Vec<String>,
 }
 
 impl CsvReader {
+    /// A reader at the start of a file.
     pub fn new() -> Self {
         Self::default()
     }
@@ -38,8 +42,20 @@ impl CsvReader {
         self.map.is_some()
     }
 
-    /// Feed a chunk; complete lines become rows appended to `out`.
+    /// Feed a chunk; complete lines become rows appended to `out`. The
+    /// error as text, for the streaming audit (which words it by whether a
+    /// header was found); [`CsvReader::read_chunk`] gives the [`LogError`].
     pub fn feed(&mut self, chunk: &[u8], out: &mut Vec<Sample>) -> Result<(), String> {
+        Ok(self.read_chunk(chunk, out)?)
+    }
+
+    /// End of input, the error as text (see [`CsvReader::feed`]).
+    pub fn finish(&mut self, out: &mut Vec<Sample>) -> Result<(), String> {
+        Ok(self.read_end(out)?)
+    }
+
+    /// Feed a chunk; complete lines become rows appended to `out`.
+    pub fn read_chunk(&mut self, chunk: &[u8], out: &mut Vec<Sample>) -> Result<(), LogError> {
         let mut start = 0;
         for (i, b) in chunk.iter().enumerate() {
             if *b == b'\n' {
@@ -55,7 +71,7 @@ impl CsvReader {
         }
         if start < chunk.len() {
             if self.partial.len() + (chunk.len() - start) > 1 << 20 {
-                return Err(format!("line {}: longer than 1 MiB (not a navlog CSV?)", self.line_no + 1));
+                return Err(LogError::csv(LogPos::Line(self.line_no + 1), None, "longer than 1 MiB (not a navlog CSV?)"));
             }
             self.partial.extend_from_slice(&chunk[start..]);
         }
@@ -63,22 +79,22 @@ impl CsvReader {
     }
 
     /// End of input: parse a last line without a newline.
-    pub fn finish(&mut self, out: &mut Vec<Sample>) -> Result<(), String> {
+    pub fn read_end(&mut self, out: &mut Vec<Sample>) -> Result<(), LogError> {
         if !self.partial.is_empty() {
             let line = core::mem::take(&mut self.partial);
             self.line(&line, out)?;
         }
         if self.map.is_none() {
-            return Err("no header row found (empty file or only comments)".into());
+            return Err(LogError::csv(LogPos::File, None, "no header row found (empty file or only comments)"));
         }
         Ok(())
     }
 
-    fn line(&mut self, raw: &[u8], out: &mut Vec<Sample>) -> Result<(), String> {
+    fn line(&mut self, raw: &[u8], out: &mut Vec<Sample>) -> Result<(), LogError> {
         self.line_no += 1;
         let ln = self.line_no;
         let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
-        let text = core::str::from_utf8(raw).map_err(|_| format!("line {ln}: not UTF-8 text (binary file?)"))?;
+        let text = core::str::from_utf8(raw).map_err(|_| LogError::csv(LogPos::Line(ln), None, "not UTF-8 text (binary file?)"))?;
         let text = if ln == 1 { text.trim_start_matches('\u{feff}') } else { text };
         if text.trim().is_empty() {
             return Ok(());
@@ -102,20 +118,22 @@ impl CsvReader {
             if cell.is_empty() {
                 continue;
             }
-            let v: f64 = cell.parse().map_err(|_| format!("line {ln}, column '{}': cannot parse \"{}\" as a number", COLUMNS[*idx], truncate(cell)))?;
+            let v: f64 = cell.parse().map_err(|_| {
+                LogError::csv(LogPos::Line(ln), COLUMNS.get(*idx).copied(), format!("cannot parse \"{}\" as a number", truncate(cell)))
+            })?;
             s.set(*idx, v);
         }
         if n != map.len() {
-            return Err(format!("line {ln}: {n} fields, header has {}", map.len()));
+            return Err(LogError::csv(LogPos::Line(ln), None, format!("{n} fields, header has {}", map.len())));
         }
         if s.t.is_nan() {
-            return Err(format!("line {ln}, column 't': required on every row"));
+            return Err(LogError::csv(LogPos::Line(ln), Some("t"), "required on every row"));
         }
         out.push(s);
         Ok(())
     }
 
-    fn header(&mut self, text: &str) -> Result<(), String> {
+    fn header(&mut self, text: &str) -> Result<(), LogError> {
         let mut map = Vec::new();
         let mut unknown = Vec::new();
         let mut seen = [false; COLUMNS.len()];
@@ -124,7 +142,7 @@ impl CsvReader {
             match Sample::column_index(name) {
                 Some(i) => {
                     if seen[i] {
-                        return Err(format!("header: column '{name}' appears twice"));
+                        return Err(LogError::csv(LogPos::Header, Some(name), "appears twice"));
                     }
                     seen[i] = true;
                     map.push(Some(i));
@@ -137,7 +155,7 @@ impl CsvReader {
         }
         if !seen[0] {
             let hint = if text.contains(';') || text.contains('\t') { " (the delimiter must be a comma)" } else { "" };
-            return Err(format!("header: no 't' column{hint}"));
+            return Err(LogError::csv(LogPos::Header, None, format!("no 't' column{hint}")));
         }
         if !unknown.is_empty() {
             self.warnings.push(format!("unknown columns ignored: {}", unknown.join(", ")));
@@ -152,11 +170,11 @@ fn truncate(s: &str) -> String {
 }
 
 /// Parse a whole navlog CSV.
-pub fn read_csv(bytes: &[u8]) -> Result<LogData, String> {
+pub fn read_csv(bytes: &[u8]) -> Result<LogData, LogError> {
     let mut r = CsvReader::new();
     let mut rows = Vec::new();
-    r.feed(bytes, &mut rows)?;
-    r.finish(&mut rows)?;
+    r.read_chunk(bytes, &mut rows)?;
+    r.read_end(&mut rows)?;
     let mut missing = vec![];
     if !rows.iter().any(|s| s.has_position() || s.reports_no_fix()) {
         missing.push("gps".to_string());
@@ -208,16 +226,40 @@ mod tests {
 
     #[test]
     fn errors_name_line_and_column() {
-        let e = read_csv(b"t,lat\n0,abc\n").unwrap_err();
+        let e = read_csv(b"t,lat\n0,abc\n").unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("'lat'") && e.contains("abc"), "{e}");
-        let e = read_csv(b"t;lat;lon\n0;1;2\n").unwrap_err();
+        let e = read_csv(b"t;lat;lon\n0;1;2\n").unwrap_err().to_string();
         assert!(e.contains("delimiter"), "{e}");
-        assert!(read_csv(b"").unwrap_err().contains("no header"));
-        assert!(read_csv(b"# only\n").unwrap_err().contains("no header"));
-        let e = read_csv(b"t,lat\n0,1,2\n").unwrap_err();
+        assert!(read_csv(b"").unwrap_err().to_string().contains("no header"));
+        assert!(read_csv(b"# only\n").unwrap_err().to_string().contains("no header"));
+        let e = read_csv(b"t,lat\n0,1,2\n").unwrap_err().to_string();
         assert!(e.contains("line 2"), "{e}");
         assert!(read_csv(&[0xff, 0xfe, 0x00, 0x12]).is_err());
-        let e = read_csv(b"t,lat\n,1\n").unwrap_err();
+        let e = read_csv(b"t,lat\n,1\n").unwrap_err().to_string();
         assert!(e.contains("'t'"), "{e}");
+    }
+
+    /// The error names the line and column as data, and its text is the
+    /// one-line message users saw before errors were typed.
+    #[test]
+    fn log_errors_carry_line_column_and_message() {
+        let e = read_csv(b"# c\nt,lat\n0,1\n0.1,abc\n").unwrap_err();
+        assert_eq!((e.format, e.pos, e.column.as_deref(), e.line()), ("csv", LogPos::Line(4), Some("lat"), Some(4)));
+        assert_eq!(e.to_string(), "line 4, column 'lat': cannot parse \"abc\" as a number");
+        let e = read_csv(b"t,lat\n0,1,2\n").unwrap_err();
+        assert_eq!((e.pos, e.column.as_deref()), (LogPos::Line(2), None));
+        assert_eq!(e.to_string(), "line 2: 3 fields, header has 2");
+        let e = read_csv(b"t,lat,lat\n").unwrap_err();
+        assert_eq!((e.pos, e.column.as_deref()), (LogPos::Header, Some("lat")));
+        assert_eq!(e.to_string(), "header: column 'lat' appears twice");
+        let e = read_csv(b"t,lat\n,1\n").unwrap_err();
+        assert_eq!(e.to_string(), "line 2, column 't': required on every row");
+        let e = read_csv(b"a;b\n").unwrap_err();
+        assert_eq!(e.to_string(), "header: no 't' column (the delimiter must be a comma)");
+        assert_eq!(read_csv(b"").unwrap_err(), LogError::csv(LogPos::File, None, "no header row found (empty file or only comments)"));
+        // A line that never ends names the line it is on.
+        let mut r = CsvReader::new();
+        let e = r.read_chunk(&vec![b'x'; (1 << 20) + 1], &mut vec![]).unwrap_err();
+        assert_eq!(e.to_string(), "line 1: longer than 1 MiB (not a navlog CSV?)");
     }
 }

@@ -64,7 +64,7 @@
 use std::collections::BTreeMap;
 
 use crate::logs::extras::{gps_to_unix, EphSource, Extras};
-use crate::logs::{LogData, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
+use crate::logs::{LogData, LogError, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::sample::Sample;
 
 const HEAD1: u8 = 0xA3;
@@ -98,14 +98,14 @@ pub fn is_dataflash(bytes: &[u8]) -> bool {
 
 /// Parse a DataFlash log into samples sorted by boot time (see the module
 /// doc for the mapping). `Err` (one line) only when no sample row can be read.
-pub fn read_dataflash(bytes: &[u8]) -> Result<LogData, String> {
+pub fn read_dataflash(bytes: &[u8]) -> Result<LogData, LogError> {
     let mut rows = Vec::new();
     let summary = read_dataflash_into(bytes, &mut rows)?;
     Ok(summary.with_rows(rows))
 }
 
 /// [`read_dataflash`] with the rows going to `sink`.
-pub fn read_dataflash_into(bytes: &[u8], sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+pub fn read_dataflash_into(bytes: &[u8], sink: &mut dyn RowSink) -> Result<LogSummary, LogError> {
     let mut s = DataflashStream::new();
     for c in bytes.chunks(FEED_CHUNK) {
         s.feed(c, sink);
@@ -135,6 +135,7 @@ impl Default for DataflashStream {
 }
 
 impl DataflashStream {
+    /// A reader at the start of a file (only the built-in `FMT` is known).
     pub fn new() -> Self {
         let mut types: Vec<Option<Layout>> = (0..256).map(|_| None).collect();
         if let Some(slot) = types.get_mut(usize::from(FMT_TYPE)) {
@@ -155,13 +156,14 @@ impl DataflashStream {
         self.win.held_bytes() + self.out.emit.held_bytes()
     }
 
+    /// The next chunk of the file (any size); rows that are final go to `sink`.
     pub fn feed(&mut self, chunk: &[u8], sink: &mut dyn RowSink) {
         self.win.push(chunk);
         self.run(false, sink);
     }
 
     /// End of input: the rows still buffered go to `sink`.
-    pub fn finish(mut self, sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+    pub fn finish(mut self, sink: &mut dyn RowSink) -> Result<LogSummary, LogError> {
         self.run(true, sink);
         let n = self.win.end();
         self.out.finish(&self.types, n, sink)
@@ -1089,7 +1091,7 @@ impl Out {
         self.extras.message(t, "event", &text);
     }
 
-    fn finish(mut self, types: &[Option<Layout>], n_bytes: u64, sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+    fn finish(mut self, types: &[Option<Layout>], n_bytes: u64, sink: &mut dyn RowSink) -> Result<LogSummary, LogError> {
         self.flush_gps(sink);
         {
             let Out { emit, att, with_att, span, .. } = &mut self;
@@ -1115,7 +1117,7 @@ impl Out {
                 .first()
                 .map(|w| format!("; {w}"))
                 .unwrap_or_default();
-            return Err(format!("{why}{first}"));
+            return Err(LogError::file("dataflash", format!("{why}{first}")));
         }
 
         if self.skipped > 0 {
@@ -1848,11 +1850,14 @@ mod tests {
         assert!(read_dataflash(b"").is_err());
         assert!(read_dataflash(b"t,lat,lon\n0,1,2\n").is_err());
         // FMT messages only: readable but nothing usable.
-        let e = read_dataflash(&LOITER[..FMT_LEN * 3])
-            .err()
-            .unwrap_or_default();
+        let e = read_dataflash(&LOITER[..FMT_LEN * 3]).err().map(|e| e.to_string()).unwrap_or_default();
         assert!(e.contains("no GPS, IMU or BARO rows"), "{e}");
         assert!(!e.contains('\n'));
+        // The error is the whole file's, with the counts that say how much was read.
+        let e = read_dataflash(&LOITER[..FMT_LEN * 3]).unwrap_err();
+        assert_eq!((e.format, e.pos, e.unrecognised), ("dataflash", crate::error::LogPos::File, false));
+        assert_eq!(e.message, format!("DataFlash log has no GPS, IMU or BARO rows (3 messages in {} bytes)", FMT_LEN * 3));
+        assert_eq!(e.to_string(), e.message);
     }
 
     // ---- Synthetic logs ----------------------------------------------------

@@ -29,7 +29,9 @@ pub enum EphSource {
 /// One flight-mode change: from `t` (boot-clock s) the vehicle is in `mode`.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ModeChange {
+    /// Boot-clock s.
     pub t: f64,
+    /// The mode's name as the autopilot spells it (e.g. "AUTO_LOITER", "RTL").
     pub mode: String,
 }
 
@@ -40,17 +42,21 @@ pub struct LogMessage {
     pub t: f64,
     /// "error", "warning", "info" or "event".
     pub level: &'static str,
+    /// The message text.
     pub text: String,
 }
 
 /// The extras a reader collects.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Extras {
+    /// What the log's receiver-quality column holds.
     pub eph_source: EphSource,
     /// UTC (Unix s) at boot-clock 0, from the first GPS report that carries
     /// UTC time; `None` when the log has none.
     pub utc_at_boot: Option<f64>,
+    /// Flight-mode changes, in time order.
     pub modes: Vec<ModeChange>,
+    /// The autopilot's own messages, in time order.
     pub messages: Vec<LogMessage>,
     /// Modes and messages over the caps, not kept.
     pub dropped: u64,

@@ -11,6 +11,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
+pub use crate::error::{LogError, LogPos};
 use crate::sample::Sample;
 
 pub mod csv;
@@ -41,11 +42,17 @@ pub struct LogData {
 /// its rows (they went to the sink).
 #[derive(Clone, Debug, Default)]
 pub struct LogSummary {
+    /// "csv", "ulog" or "dataflash".
     pub format: &'static str,
+    /// Vehicle and log metadata (key, value).
     pub meta: Vec<(String, String)>,
+    /// Things the reader coped with.
     pub warnings: Vec<String>,
+    /// Detector inputs the log lacks: any of "gps", "imu", "attitude", "baro".
     pub missing: Vec<String>,
+    /// Message counts per topic or message type.
     pub topic_counts: Vec<(String, u64)>,
+    /// Receiver-quality kind, UTC time, flight modes, autopilot messages.
     pub extras: extras::Extras,
 }
 
@@ -58,6 +65,7 @@ impl LogSummary {
 
 /// Where a streaming reader puts its rows, in time order.
 pub trait RowSink {
+    /// Take the next row (rows come in time order).
     fn row(&mut self, s: &Sample);
 }
 
@@ -143,6 +151,7 @@ impl<T> Default for Reorder<T> {
 }
 
 impl<T> Reorder<T> {
+    /// An empty buffer that holds at most `cap` rows.
     pub fn new(cap: usize) -> Self {
         Reorder { heap: BinaryHeap::new(), slots: Vec::new(), free: Vec::new(), cap: cap.max(1), seq: 0, last: None, late: 0 }
     }
@@ -232,6 +241,7 @@ impl<T> Reorder<T> {
         self.heap.len()
     }
 
+    /// Nothing held.
     pub fn is_empty(&self) -> bool {
         self.heap.is_empty()
     }
@@ -281,14 +291,14 @@ impl Window {
 }
 
 /// Read any supported log, recognised by content (not by file name).
-pub fn read_any(bytes: &[u8]) -> Result<LogData, String> {
+pub fn read_any(bytes: &[u8]) -> Result<LogData, LogError> {
     if ulog::is_ulog(bytes) {
         return ulog::read_ulog(bytes);
     }
     if dataflash::is_dataflash(bytes) {
         return dataflash::read_dataflash(bytes);
     }
-    csv::read_csv(bytes).map_err(|e| format!("not a ULog or DataFlash log, and not a navlog CSV: {e}"))
+    csv::read_csv(bytes).map_err(LogError::unrecognised)
 }
 
 /// What a file is, from its first bytes; `None` while too few bytes are in
@@ -312,8 +322,11 @@ pub fn sniff(head: &[u8], at_end: bool) -> Option<Format> {
 /// The three input formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
+    /// A navlog CSV (contract §1).
     Csv,
+    /// A PX4 ULog file.
     Ulog,
+    /// An ArduPilot DataFlash (`.bin`) log.
     Dataflash,
 }
 

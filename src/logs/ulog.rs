@@ -59,7 +59,7 @@ use std::collections::HashMap;
 use std::rc::Rc;
 
 use super::extras::{EphSource, Extras};
-use super::{LogData, LogSummary, NoRows, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
+use super::{LogData, LogError, LogSummary, NoRows, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::sample::Sample;
 
 /// First 7 header bytes of every ULog file ("ULog" + 0x01 0x12 0x35).
@@ -110,16 +110,16 @@ pub fn is_ulog(bytes: &[u8]) -> bool {
     bytes.starts_with(&MAGIC)
 }
 
-/// Parse a whole ULog file. Err(String) only when nothing usable can be read
+/// Parse a whole ULog file. Err only when nothing usable can be read
 /// (too short, bad magic, no message after the header), with a one-line reason.
-pub fn read_ulog(bytes: &[u8]) -> Result<LogData, String> {
+pub fn read_ulog(bytes: &[u8]) -> Result<LogData, LogError> {
     let mut rows = Vec::new();
     let summary = read_ulog_into(bytes, &mut rows)?;
     Ok(summary.with_rows(rows))
 }
 
 /// [`read_ulog`] with the rows going to `sink` (both passes over `bytes`).
-pub fn read_ulog_into(bytes: &[u8], sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+pub fn read_ulog_into(bytes: &[u8], sink: &mut dyn RowSink) -> Result<LogSummary, LogError> {
     let mut scan = UlogStream::plan();
     for c in bytes.chunks(FEED_CHUNK) {
         scan.feed(c, &mut NoRows);
@@ -192,22 +192,22 @@ impl UlogStream {
 
     /// End of the first pass: a fresh reader to be fed the same bytes again.
     /// Err when the file has no usable header or message.
-    pub fn second_pass(mut self) -> Result<UlogStream, String> {
+    pub fn second_pass(mut self) -> Result<UlogStream, LogError> {
         self.run(true, &mut NoRows);
         self.check()?;
         let seen = self.p.seen;
         Ok(Self::with(Some(seen), Some(self.win.end())))
     }
 
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), LogError> {
         if self.header.is_none() {
             if !self.win.get(0, 7).starts_with(&MAGIC) {
-                return Err("not a ULog file (bad magic)".to_string());
+                return Err(LogError::file("ulog", "not a ULog file (bad magic)"));
             }
-            return Err(format!("ULog header truncated ({} of 16 bytes)", self.win.end()));
+            return Err(LogError::file("ulog", format!("ULog header truncated ({} of 16 bytes)", self.win.end())));
         }
         if self.p.messages == 0 {
-            return Err("ULog file has no readable message after the header".to_string());
+            return Err(LogError::file("ulog", "ULog file has no readable message after the header"));
         }
         Ok(())
     }
@@ -220,7 +220,7 @@ impl UlogStream {
 
     /// End of the second pass: rows still buffered go to `sink`; the
     /// metadata, warnings and counts.
-    pub fn finish(mut self, sink: &mut dyn RowSink) -> Result<LogSummary, String> {
+    pub fn finish(mut self, sink: &mut dyn RowSink) -> Result<LogSummary, LogError> {
         self.run(true, sink);
         self.check()?;
         let (version, start_us) = self.header.unwrap_or((0, 0));

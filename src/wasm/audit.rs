@@ -93,7 +93,7 @@ impl Auditor {
     pub fn new(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Auditor, JsError> {
         let cfg = config_from(&config)?;
         let bytes = js_in::bytes(bytes, MAX_BYTES, "Auditor: bytes").map_err(err)?;
-        let log = logs::read_any(&bytes).map_err(err)?;
+        let log = logs::read_any(&bytes)?;
         let rows = log.samples.len();
         let run = audit::AuditRun::new(log, &cfg).map_err(err)?;
         Ok(Auditor { run: Some(run), rows })
@@ -214,7 +214,7 @@ struct LogInfo<'a, W: Serialize, M: Serialize, X: Serialize, T: Serialize> {
 #[wasm_bindgen(js_name = readLog, unchecked_return_type = "LogColumns")]
 pub fn read_log(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue) -> Result<JsValue, JsError> {
     let bytes = js_in::bytes(bytes, MAX_BYTES, "readLog: bytes").map_err(err)?;
-    let log = logs::read_any(&bytes).map_err(err)?;
+    let log = logs::read_any(&bytes)?;
     let cols = Object::new();
     let mut buf = vec![0.0; log.samples.len()];
     for (i, name) in COLUMNS.iter().enumerate() {

@@ -23,10 +23,12 @@ const LOG = join(root, '..', 'shared', 'data', 'px4', 'sample_log_small.ulg');
 const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
 const CORE_WASM = statSync(join(pkg, 'navguard_core_bg.wasm')).size;
 const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
-// Issue 15 asks for <= 300 KB. With the threshold pools embedded (no
-// simulator in the core) it is 610 KB: the log readers, audits, snapshots
-// and serde (the JSON model) make up the rest. Lower this as the core shrinks.
-const CORE_WASM_BUDGET = 620_000;
+// Issue 15 asks for <= 300 KB. With the threshold pools and the model
+// embedded in postcard (no simulator, no JSON parser in the core) it is
+// 557 KB: the row path at opt-level 3, the log readers, snapshots, audits
+// and the config checker make up the rest (README, Speed and size). Lower
+// this as the core shrinks.
+const CORE_WASM_BUDGET = 565_000;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;

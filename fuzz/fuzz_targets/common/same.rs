@@ -1,5 +1,5 @@
 //! Shared by the reader targets: a streamed read must equal the whole read.
-use navguard::logs::{LogData, LogSummary};
+use navguard::logs::{LogData, LogError, LogSummary};
 use navguard::sample::{Sample, COLUMNS};
 
 fn bits(rows: &[Sample]) -> Vec<u64> {
@@ -7,7 +7,7 @@ fn bits(rows: &[Sample]) -> Vec<u64> {
 }
 
 /// Same rows (bit for bit), metadata, warnings and counts, or the same error.
-pub fn same(whole: Result<LogData, String>, streamed: Result<LogSummary, String>, rows: &[Sample], step: usize) {
+pub fn same(whole: Result<LogData, LogError>, streamed: Result<LogSummary, LogError>, rows: &[Sample], step: usize) {
     match (whole, streamed) {
         (Ok(d), Ok(sum)) => {
             assert!(d.samples.windows(2).all(|w| !(w[1].t < w[0].t)), "samples not sorted by t");
