@@ -60,6 +60,7 @@ use crate::sample::Sample;
 
 /// What kind of verdict a row carries.
 pub mod kind {
+    /// Normal: the epoch's sensors agree.
     pub const NORMAL: u8 = 0;
     /// Residual-based fault (ANFIS).
     pub const RESIDUAL: u8 = 1;
@@ -76,12 +77,15 @@ pub mod kind {
 /// Per-row output.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Output {
+    /// Row time, s (the boot clock of the input).
     pub t: f64,
     /// 0 normal, 1 fault.
     pub status: u8,
     /// F-indicator.
     pub f: f64,
+    /// R-indicator: the largest per-group residual ratio (≈ 1 clean).
     pub r: f64,
+    /// C-indicator: the residual–Δr correlation (Pearson, ≈ 0.2 clean).
     pub c: f64,
     /// See [`kind`].
     pub kind: u8,
@@ -95,8 +99,11 @@ pub struct Output {
 /// Bad input: names the row and the field.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InputError {
+    /// Row number (0-based) of the rejected sample.
     pub row: u64,
+    /// The column at fault.
     pub field: &'static str,
+    /// Why the value was rejected.
     pub reason: String,
 }
 
@@ -109,13 +116,21 @@ impl core::fmt::Display for InputError {
 /// Counters of things worth reporting (no unbounded storage).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Stats {
+    /// Rows pushed.
     pub rows: u64,
+    /// GPS epochs judged (rows with a new fix).
     pub gps_epochs: u64,
+    /// Rows with a usable IMU sample (specific force and attitude).
     pub imu_rows: u64,
+    /// Rows with a barometer sample.
     pub baro_rows: u64,
+    /// ANFIS retrainings so far (every TC fault samples).
     pub retrains: u64,
+    /// Times the filter was re-anchored on a fix.
     pub filter_resets: u64,
+    /// Logging gaps (every sensor silent longer than `dataGap`).
     pub data_gaps: u64,
+    /// Filter updates that failed numerically (the filter restarts).
     pub filter_errors: u64,
 }
 
@@ -1414,6 +1429,7 @@ impl Detector {
         Ok(det)
     }
 
+    /// Detector with an explicit model (the config's `model` field is ignored).
     pub fn with_model(cfg: Config, model: &Model) -> Self {
         Detector {
             kf: None,
@@ -1485,14 +1501,17 @@ impl Detector {
         self.oracle = on;
     }
 
+    /// The checked config this detector runs.
     pub fn config(&self) -> &Config {
         &self.cfg
     }
 
+    /// Counters since the detector was made (rows, epochs, retrains, resets).
     pub fn stats(&self) -> Stats {
         self.stats
     }
 
+    /// The current ANFIS (after any online retraining).
     pub fn anfis(&self) -> &Anfis {
         &self.learning.anfis
     }

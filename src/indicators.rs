@@ -180,11 +180,13 @@ pub struct SlidingSum {
 }
 
 impl SlidingSum {
+    /// An empty window of `cap` entries.
     pub fn new(cap: usize) -> Self {
         let cap = cap.max(1);
         SlidingSum { buf: vec![[0.0; SUMS]; cap], head: 0, len: 0, total: [0.0; SUMS], since_resum: 0 }
     }
 
+    /// Empty the window.
     pub fn clear(&mut self) {
         self.head = 0;
         self.len = 0;
@@ -192,6 +194,7 @@ impl SlidingSum {
         self.since_resum = 0;
     }
 
+    /// Add one entry, evicting the oldest when full.
     pub fn push(&mut self, e: &[f64; SUMS]) {
         let cap = self.buf.len();
         if self.len == cap {
@@ -221,14 +224,17 @@ impl SlidingSum {
         }
     }
 
+    /// The sums over the entries in the window.
     pub fn total(&self) -> &[f64; SUMS] {
         &self.total
     }
 
+    /// Entries in the window.
     pub fn len(&self) -> usize {
         self.len
     }
 
+    /// No entry yet.
     pub fn is_empty(&self) -> bool {
         self.len == 0
     }
@@ -595,6 +601,7 @@ pub struct LagTest<const D: usize> {
 }
 
 impl<const D: usize> LagTest<D> {
+    /// A test over `span` s (ring of `cap`), σ starting at `sigma0` with floor `floor`, learnt at `alpha` per window, baseline rate time constant `tau` s.
     pub fn new(cap: usize, span: f64, sigma0: f64, floor: f64, alpha: f64, tau: f64, fast_start: bool) -> Self {
         LagTest {
             ring: vec![(0.0, [0.0; D]); cap.max(2)],
@@ -645,6 +652,7 @@ impl<const D: usize> LagTest<D> {
         self.learnt
     }
 
+    /// Empty the window and release the hold; the learnt σ and baseline rate stay.
     pub fn clear(&mut self) {
         self.head = 0;
         self.len = 0;
@@ -774,6 +782,7 @@ const IMU_ALPHA: f64 = 0.005;
 const IMU_TAU: f64 = 20.0;
 
 impl IndicatorEngine {
+    /// An engine with the given window lengths and learning rates.
     pub fn new(set: IndicatorSettings) -> Self {
         let w = set.window.max(1);
         let ws = w.div_ceil(4).max(1);
@@ -822,6 +831,7 @@ impl IndicatorEngine {
         }
     }
 
+    /// The settings it was made with.
     pub fn settings(&self) -> &IndicatorSettings {
         &self.set
     }
@@ -1039,6 +1049,7 @@ impl IndicatorEngine {
     pub fn clear_imu(&mut self) {
         self.imu.clear();
     }
+    /// Forget the baro test's window (after a baro gap or re-anchoring).
     pub fn clear_baro(&mut self) {
         self.baro.clear();
     }
