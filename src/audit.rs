@@ -7,6 +7,7 @@ use serde::Serialize;
 use crate::config::Config;
 use crate::detector::{kind, Detector, Output};
 use crate::indicators::DRIVER_NAMES;
+use crate::error::LogError;
 use crate::logs::csv::CsvReader;
 use crate::logs::dataflash::DataflashStream;
 use crate::logs::ulog::UlogStream;
@@ -599,7 +600,7 @@ impl StreamAudit {
             Source::Csv(r) => {
                 for slice in chunk.chunks(CSV_SLICE) {
                     self.rows.clear();
-                    let res = r.feed(slice, &mut self.rows);
+                    let res = r.read_chunk(slice, &mut self.rows);
                     res.map_err(|e| not_csv(r, e))?;
                     for s in &self.rows {
                         feed.row(s);
@@ -669,7 +670,7 @@ impl StreamAudit {
             Source::Sniff(_) => return Err("not a ULog or DataFlash log, and not a navlog CSV: no header row found (empty file or only comments)".into()),
             Source::Csv(mut r) => {
                 self.rows.clear();
-                let res = r.finish(&mut self.rows);
+                let res = r.read_end(&mut self.rows);
                 res.map_err(|e| not_csv(&r, e))?;
                 self.drain();
                 let meta = r.comments.iter().take(8).enumerate().map(|(i, c)| (format!("comment{i}"), c.clone())).collect();
@@ -695,7 +696,8 @@ impl StreamAudit {
 }
 
 /// An error before the header says what the file is not, as [`read_any`](crate::logs::read_any) does.
-fn not_csv(r: &CsvReader, e: String) -> String {
+fn not_csv(r: &CsvReader, e: LogError) -> String {
+    let e = e.to_string();
     if r.has_header() {
         e
     } else {

@@ -2,7 +2,7 @@
 //!
 //! `#` lines before the header are comments; column order is free; unknown
 //! columns are ignored with a warning; an empty cell is "absent" (NaN). The
-//! reader is incremental ([`CsvReader::feed`] takes any chunk of bytes), so a
+//! reader is incremental ([`CsvReader::read_chunk`] takes any chunk of bytes), so a
 //! file larger than memory can be streamed; [`read_csv`] is the whole-buffer
 //! convenience.
 
@@ -40,18 +40,6 @@ impl CsvReader {
     /// Header columns known so far (after the header line was read).
     pub fn has_header(&self) -> bool {
         self.map.is_some()
-    }
-
-    /// Feed a chunk; complete lines become rows appended to `out`. The
-    /// error as text, for the streaming audit (which words it by whether a
-    /// header was found); [`CsvReader::read_chunk`] gives the [`LogError`].
-    pub fn feed(&mut self, chunk: &[u8], out: &mut Vec<Sample>) -> Result<(), String> {
-        Ok(self.read_chunk(chunk, out)?)
-    }
-
-    /// End of input, the error as text (see [`CsvReader::feed`]).
-    pub fn finish(&mut self, out: &mut Vec<Sample>) -> Result<(), String> {
-        Ok(self.read_end(out)?)
     }
 
     /// Feed a chunk; complete lines become rows appended to `out`.
@@ -216,9 +204,9 @@ mod tests {
         for cut in 1..text.len() {
             let mut r = CsvReader::new();
             let mut rows = vec![];
-            r.feed(&text.as_bytes()[..cut], &mut rows).unwrap();
-            r.feed(&text.as_bytes()[cut..], &mut rows).unwrap();
-            r.finish(&mut rows).unwrap();
+            r.read_chunk(&text.as_bytes()[..cut], &mut rows).unwrap();
+            r.read_chunk(&text.as_bytes()[cut..], &mut rows).unwrap();
+            r.read_end(&mut rows).unwrap();
             let bits = |v: &[Sample]| -> Vec<Vec<u64>> { v.iter().map(|s| (0..COLUMNS.len()).map(|i| s.get(i).to_bits()).collect()).collect() };
             assert_eq!(bits(&rows), bits(&whole), "cut at {cut}");
         }
