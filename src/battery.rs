@@ -77,6 +77,7 @@ pub const SPLIT_LEN: u64 = 1_000_000;
 pub const CHECK_BASE: u64 = 500_000;
 
 impl Split {
+    /// Parse a split name (`tune` or `eval`), as given to `--split`.
     pub fn parse(s: &str) -> Result<Split, String> {
         match s {
             "tune" => Ok(Split::Tune),
@@ -84,6 +85,7 @@ impl Split {
             _ => Err(format!("split: unknown split \"{s}\" (tune, eval)")),
         }
     }
+    /// Lower-case name (`tune`, `eval`), as parsed and printed.
     pub fn name(self) -> &'static str {
         match self {
             Split::Tune => "tune",
@@ -117,6 +119,7 @@ impl Split {
 // ---------------------------------------------------------------------------
 // Draws
 
+/// GPS position noise family (`mixed` is drawn only in `eval`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum NoiseFamily {
@@ -128,14 +131,19 @@ pub enum NoiseFamily {
     Mixed,
 }
 
+/// IMU grade: sets the ranges the noise, bias and attitude error are drawn from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ImuGrade {
+    /// Consumer MEMS: 150–400 µg/√Hz, bias σ 0.05–0.3 m/s², tilt error 0.3–1°, heading 1–3°.
     Consumer,
+    /// Industrial: 60–150 µg/√Hz, bias σ 0.01–0.05 m/s², tilt error 0.1–0.3°, heading 0.5–1°.
     Industrial,
+    /// Tactical: 20–60 µg/√Hz, bias σ 0.002–0.01 m/s², tilt error 0.02–0.08°, heading 0.1–0.3°.
     Tactical,
 }
 
+/// Trajectory family of a flight (drawn uniformly unless a check pins it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum PathKind {
@@ -150,7 +158,9 @@ pub enum PathKind {
 }
 
 impl PathKind {
+    /// Every kind, in draw order (drawn uniformly).
     pub const ALL: [PathKind; 4] = [PathKind::Hover, PathKind::Survey, PathKind::Aggressive, PathKind::FixedWing];
+    /// Kebab-case name, as in the tables and flight lines.
     pub fn name(self) -> &'static str {
         match self {
             PathKind::Hover => "hover",
@@ -191,6 +201,7 @@ pub enum FaultKind {
 }
 
 impl FaultKind {
+    /// Every kind, in draw order (drawn uniformly).
     pub const ALL: [FaultKind; 10] = [
         FaultKind::Step,
         FaultKind::Frozen,
@@ -203,6 +214,7 @@ impl FaultKind {
         FaultKind::BaroStuck,
         FaultKind::BaroDrift,
     ];
+    /// Kebab-case name, as in the tables and flight lines.
     pub fn name(self) -> &'static str {
         match self {
             FaultKind::Step => "step",
@@ -235,6 +247,7 @@ impl FaultKind {
     }
 }
 
+/// Axis of a fault's offset; only step, ramp, drag-off and accel bias draw `Vertical`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Axis {
@@ -248,7 +261,9 @@ pub enum Axis {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Fault {
+    /// What fails.
     pub kind: FaultKind,
+    /// Horizontal or vertical (always horizontal for kinds without an axis).
     pub axis: Axis,
     /// m (step, degraded, baro-step), m/s (ramp, drag-off, baro-drift),
     /// m/s² (accel-bias); 0 for frozen, outage, baro-stuck.
@@ -258,15 +273,18 @@ pub struct Fault {
     pub direction: f64,
     /// True-time interval `[start, end)`, s from the log start.
     pub start: f64,
+    /// End of the true-time interval (exclusive), s from the log start.
     pub end: f64,
     /// The same interval on the log's boot clock (`t` column), s.
     pub start_log: f64,
+    /// End of the interval on the boot clock (`t` column), s.
     pub end_log: f64,
     /// Drag-off: time over which the velocity offset builds up, s.
     pub onset: f64,
 }
 
 impl Fault {
+    /// Fault length, true s (`end − start`).
     pub fn duration(&self) -> f64 {
         self.end - self.start
     }
@@ -288,15 +306,19 @@ impl Fault {
 pub struct GpsDraw {
     /// Epochs per second (true time).
     pub rate: f64,
+    /// Position noise family.
     pub family: NoiseFamily,
     /// Position error σ, m (1σ per axis horizontal; vertical).
     pub sigma_h: f64,
+    /// Vertical position error σ, m (1.6–2.4× `sigma_h`).
     pub sigma_v: f64,
     /// Gauss–Markov correlation time, s, and its share of the variance.
     pub tau: f64,
+    /// Gauss–Markov share of the position variance (0 white, 0.95 Gauss–Markov, 0.3–0.7 mixed).
     pub gm_share: f64,
     /// Velocity white noise σ, m/s (horizontal per axis; vertical).
     pub vel_sigma_h: f64,
+    /// Vertical velocity noise σ, m/s (1.3–2× `vel_sigma_h`).
     pub vel_sigma_v: f64,
     /// Reported `eph` = eph_scale × σ_h (× satellite factor); `epv` likewise.
     pub eph_scale: f64,
@@ -314,7 +336,9 @@ pub struct GpsDraw {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct ImuDraw {
+    /// Samples per second (true time), Hz: 50, 100, 200 or 400.
     pub rate: f64,
+    /// Grade the noise, bias and attitude-error ranges are drawn from.
     pub grade: ImuGrade,
     /// Accelerometer white noise density, m/s²/√Hz.
     pub accel_density: f64,
@@ -325,11 +349,14 @@ pub struct ImuDraw {
     /// Attitude error: constant tilt σ and Gauss–Markov wander σ (deg),
     /// heading error σ (deg).
     pub tilt_sigma_deg: f64,
+    /// Gauss–Markov tilt wander σ per axis, deg (τ 20–60 s).
     pub wander_sigma_deg: f64,
+    /// Constant heading error σ, deg.
     pub heading_sigma_deg: f64,
     /// Airframe vibration RMS at full throttle, m/s² per horizontal axis
     /// (vertical 1.5×), and the blade-pass frequency, Hz.
     pub vibration: f64,
+    /// Blade-pass frequency, Hz (60–220); its harmonic (1.9–2.1×) adds at half amplitude.
     pub vibration_hz: f64,
 }
 
@@ -337,13 +364,17 @@ pub struct ImuDraw {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct BaroDraw {
+    /// Samples per second (true time), Hz: 10, 20, 25 or 50.
     pub rate: f64,
+    /// Time of the first sample, true s (0–0.02).
     pub phase: f64,
     /// Datum offset, m.
     pub offset: f64,
     /// Gauss–Markov error σ (m), τ (s); white noise σ (m).
     pub gm_sigma: f64,
+    /// Gauss–Markov correlation time, s (10–60).
     pub gm_tau: f64,
+    /// White noise σ, m (0.05–0.3).
     pub white: f64,
     /// Dynamic-pressure error per airspeed², m/(m/s)².
     pub k_dynamic: f64,
@@ -351,6 +382,7 @@ pub struct BaroDraw {
     pub k_climb: f64,
     /// Ground-effect error on the ground (m), fading out by `ground_height` m.
     pub ground_effect: f64,
+    /// Height at which the ground effect has faded to 0, m (1.5–4).
     pub ground_height: f64,
 }
 
@@ -359,7 +391,9 @@ pub struct BaroDraw {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct ClockDraw {
+    /// Boot-clock seconds per true second: 1 (half the flights) or 0.92–1.0.
     pub rate: f64,
+    /// Boot-clock time at true time 0, s (5–60).
     pub boot: f64,
     /// GPS seconds (since 1980) at true time 0: 2011–2027.
     pub gps_epoch: f64,
@@ -369,6 +403,7 @@ pub struct ClockDraw {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct PathDraw {
+    /// Trajectory family.
     pub kind: PathKind,
     /// Flight length (true time), s.
     pub duration: f64,
@@ -376,6 +411,7 @@ pub struct PathDraw {
     pub wind: [f64; 2],
     /// Multirotor drag: linear (1/s) and quadratic (1/m) coefficients.
     pub drag_linear: f64,
+    /// Quadratic drag coefficient, 1/m (0.008–0.015 multirotor; 0 fixed-wing).
     pub drag_quadratic: f64,
 }
 
@@ -383,22 +419,36 @@ pub struct PathDraw {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Flight {
+    /// Which seed range the flight comes from.
     pub split: Split,
+    /// Flight index within the split.
     pub index: u64,
+    /// Seed the flight is drawn from (`split.seed(index)`).
     pub seed: u64,
+    /// Trajectory draws.
     pub path: PathDraw,
+    /// GPS receiver draws.
     pub gps: GpsDraw,
+    /// IMU draws.
     pub imu: ImuDraw,
+    /// Barometer draws.
     pub baro: BaroDraw,
+    /// Boot-clock and receiver-time draws.
     pub clock: ClockDraw,
+    /// Injected faults, sorted by start (none for a clean flight).
     pub faults: Vec<Fault>,
     /// Summary of the built path: lift-off and touch-down (true s), peak
     /// height (m), speed (m/s), tilt (deg) and horizontal acceleration (m/s²).
     pub liftoff: f64,
+    /// Touch-down, true s.
     pub touchdown: f64,
+    /// Peak height above the take-off point, m.
     pub max_height: f64,
+    /// Peak horizontal ground speed, m/s.
     pub max_speed: f64,
+    /// Peak tilt of the body z axis from vertical, deg.
     pub max_tilt_deg: f64,
+    /// Peak horizontal acceleration, m/s².
     pub max_accel_h: f64,
 }
 
@@ -423,6 +473,7 @@ fn log_uniform(rng: &mut Rng, lo: f64, hi: f64) -> f64 {
 /// Per-flight choices the specific checks pin.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Overrides {
+    /// Trajectory family to use instead of drawing one (frozen GPS needs a moving vehicle).
     pub path: Option<PathKind>,
     /// Minimum flight length, s.
     pub min_duration: Option<f64>,
@@ -771,6 +822,7 @@ pub struct Path {
     drag: (f64, f64),
     /// Lift-off and touch-down, true s.
     pub liftoff: f64,
+    /// Touch-down, true s.
     pub touchdown: f64,
     /// North–east position at grid points, m.
     grid: Vec<[f64; 2]>,
@@ -1392,7 +1444,9 @@ pub fn to_csv(f: &Flight, rows: &[Sample]) -> String {
 pub struct Epoch {
     /// Log time, s.
     pub t: f64,
+    /// Truth: 1 inside a fault's `[start, end)`, else 0.
     pub label: f64,
+    /// Detector status: 0 normal, 1 fault.
     pub status: u8,
 }
 
@@ -1400,9 +1454,11 @@ pub struct Epoch {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct EventResult {
+    /// The injected fault.
     pub fault: Fault,
     /// GPS epochs inside the fault, and how many were flagged.
     pub epochs: u64,
+    /// GPS epochs inside the fault that were flagged.
     pub flagged: u64,
     /// flagged / epochs (0 when the fault has no epoch).
     pub share: f64,
@@ -1415,6 +1471,7 @@ pub struct EventResult {
 }
 
 impl EventResult {
+    /// Whether at least one epoch inside the fault was flagged.
     pub fn detected(&self) -> bool {
         self.flagged > 0
     }
@@ -1424,14 +1481,18 @@ impl EventResult {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct FlightResult {
+    /// The flight's draws.
     pub flight: Flight,
+    /// Every evaluated GPS epoch, in log order.
     pub epochs: Vec<Epoch>,
+    /// One per fault, in the flight's fault order.
     pub events: Vec<EventResult>,
     /// Rows pushed (all sensors).
     pub rows: u64,
 }
 
 impl FlightResult {
+    /// Whether the flight has no fault (counts in the clean-flight figures).
     pub fn is_clean(&self) -> bool {
         self.flight.faults.is_empty()
     }
@@ -1494,18 +1555,25 @@ fn event_result(f: &Flight, ft: &Fault, epochs: &[Epoch]) -> EventResult {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct GroupRow {
+    /// Condition value the row pools (e.g. `10 Hz`, `ramp-h`).
     pub key: String,
+    /// Flights in the group.
     pub flights: u64,
     /// Pooled over the GPS epochs of the group's flights.
     pub metrics: Metrics,
+    /// Events counted (those `keep` accepts).
     pub events: u64,
+    /// Of those, events with at least one flagged epoch.
     pub events_flagged: u64,
     /// Mean over the group's events of the share of the event flagged.
     pub mean_event_share: f64,
     /// Median delay over the detected events, true s (NaN if none).
     pub median_delay: f64,
+    /// Fault-free flights in the group.
     pub clean_flights: u64,
+    /// GPS epochs of those clean flights.
     pub clean_epochs: u64,
+    /// Of those, epochs flagged (false alarms).
     pub clean_flagged: u64,
 }
 
@@ -1576,7 +1644,9 @@ fn median(xs: &mut [f64]) -> f64 {
 /// A table cut by one condition.
 #[derive(Clone, Debug, Serialize)]
 pub struct Table {
+    /// Condition the table is cut by (e.g. `GPS rate`).
     pub name: &'static str,
+    /// One row per condition value; fault tables end with a `clean (no fault)` row.
     pub rows: Vec<GroupRow>,
 }
 
@@ -1593,6 +1663,7 @@ pub fn kind_key(ft: &Fault) -> String {
     }
 }
 
+/// Fault-duration bucket of the duration table (`3-10 s` … `60-120 s`).
 pub fn duration_key(ft: &Fault) -> &'static str {
     bucket(ft.duration(), &[(10.0, "3-10 s"), (30.0, "10-30 s"), (60.0, "30-60 s")], "60-120 s")
 }
@@ -1688,14 +1759,19 @@ pub fn tables(results: &[FlightResult]) -> Vec<Table> {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct CheckSpec {
+    /// Label printed in the checks table.
     pub name: &'static str,
+    /// Fault kind injected.
     pub kind: FaultKind,
     /// `None`: alternate horizontal and vertical by instance.
     pub axis: Option<Axis>,
+    /// Fault magnitude (units as in [`Fault`]).
     pub magnitude: f64,
+    /// Fault length, true s.
     pub length: f64,
     /// Needs a moving vehicle (frozen GPS during hover is invisible).
     pub moving: bool,
+    /// The pass criterion as printed (applied by [`CheckSpec::passes`]).
     pub criterion: &'static str,
 }
 
@@ -1750,6 +1826,7 @@ impl CheckSpec {
 /// `CHECK_BASE + 10_000 + i` at each of [`IMU_RATES`].
 pub const IMU_RATES: [f64; 4] = [50.0, 100.0, 200.0, 400.0];
 
+/// Instance `i` of the IMU-rate check: the same eval flight at each of [`IMU_RATES`].
 pub fn imu_rate_flights(i: u64) -> Vec<Flight> {
     let base = Flight::draw(Split::Eval, CHECK_BASE + 10_000 + i);
     IMU_RATES.iter().map(|r| base.with_imu_rate(*r)).collect()
