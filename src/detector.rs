@@ -52,11 +52,11 @@ use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
-use crate::track::VelocityTrack;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 pub use crate::model::{has_signature, Model};
 use crate::sample::Sample;
+use crate::track::VelocityTrack;
 
 /// What kind of verdict a row carries.
 pub mod kind {
@@ -869,14 +869,15 @@ impl Consistency {
     /// `learn_rate`: the receiver is trusted enough to teach the clock rate.
     fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool) -> Indicators {
         let (t, y) = (fix.t, fix.y);
+        // The receiver's own time, when the log has it, measures the clock
+        // whatever the vehicle does (inside episodes too).
+        self.rate.observe_time(t, fix.gps_time);
         // Position–velocity consistency: the GPS's own position change
         // against the trapezoid of its velocities (filter-independent).
         // Not while the velocity is withheld: a biased velocity (degraded
         // fix, frozen or zeroed output) would fill the window with its own
-        // bias and hold the test up after it clears.
-        // The receiver's own time, when the log has it, measures the clock
-        // whatever the vehicle does (inside episodes too).
-        self.rate.observe_time(t, fix.gps_time);
+        // bias and hold the test up after it clears. The velocity track
+        // (`track`) integrates the same velocities, across short gaps too.
         match (&fix.vel, self.last_gps) {
             (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
                 if learn_rate {
