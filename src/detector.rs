@@ -1884,15 +1884,22 @@ impl Detector {
         // Outside any episode, a jump that brings the GPS back onto its own
         // velocity track ends a position fault the filter had followed (a
         // slow ramp): re-anchor on the fix, open nothing.
-        let track_return = verdict.fault
-            && !self.oracle
-            && !self.episode.active
-            && (self.consistency.track.returned()
-                || (self.quality.scale(fix.eph) < QUALITY_DEGRADED && res.drag_returned(
-                    self.consistency.flight_time,
-                    self.consistency.track.jump(),
-                    core::array::from_fn(|a| self.ind.sigma(3 + a)),
-                )));
+        let judge_return = verdict.fault && !self.oracle && !self.episode.active;
+        let track_return = judge_return && self.consistency.track.returned();
+        // Or the end of a drag-off the filter followed: the GPS left its
+        // track with its velocity jumping along (see `drag_returned`).
+        let drag_return = judge_return
+            && !track_return
+            && self.quality.scale(fix.eph) < QUALITY_DEGRADED
+            && res.drag_returned(
+                self.consistency.flight_time,
+                self.consistency.track.jump(),
+                core::array::from_fn(|a| self.ind.sigma(3 + a)),
+            );
+        if drag_return {
+            self.consistency.track.rebase();
+        }
+        let track_return = track_return || drag_return;
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || track_return);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
