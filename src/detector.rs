@@ -747,6 +747,12 @@ struct ClockRate {
 
 /// Longest GPS gap the velocity track integrates across, s.
 const TRACK_MAX_GAP_S: f64 = 3.0;
+/// Longest interval between two fixes that the position–velocity test
+/// compares, s: a 1 Hz receiver's period with its jitter (at 1.0 s its
+/// fixes were compared only when jitter brought two closer, so σ was never
+/// learnt and the test spoke from its prior). A longer silence is a
+/// dropped record.
+const PV_MAX_DT_S: f64 = 1.5;
 const CLOCK_BLOCK_S: f64 = 5.0;
 const CLOCK_MIN_SXX: f64 = 5.0e3;
 /// m: a block must span at least this much flight to count.
@@ -1008,7 +1014,7 @@ impl Consistency {
         // bias and hold the test up after it clears. The velocity track
         // (`track`) integrates the same velocities, across short gaps too.
         match (&fix.vel, self.last_gps) {
-            (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < 1.0 => {
+            (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < PV_MAX_DT_S => {
                 if learn_rate {
                     self.rate.observe((pt, pp, pv), t, &y, v);
                 }
@@ -1168,6 +1174,8 @@ struct Evidence<'a> {
     res: &'a Residuals,
     /// Learnt σ_Δ of the position axes, m.
     sigma_pos: [f64; 3],
+    /// The fix sits on its own velocity track (`VelocityTrack::on_track`).
+    on_track: bool,
 }
 
 impl Evidence<'_> {
@@ -1476,7 +1484,9 @@ impl Episode {
         let offset_ok = if self.receiver_lost {
             !(ind.r_group[1] > RECOVER_R)
         } else {
-            !(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV)
+            // Or the GPS never left its own velocity track: the filter
+            // drifted (a stuck baro pulled its height), not the GPS.
+            (!(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV)) || ev.on_track
         };
         let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !ev.departed(2);
         self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
@@ -1960,6 +1970,7 @@ impl Detector {
             dec: verdict.dec.as_ref(),
             res: &res,
             sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
+            on_track: self.consistency.track.on_track(),
         };
         let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         step.reset |= restart;

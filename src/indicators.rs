@@ -437,6 +437,12 @@ const PV_U0: f64 = 0.3;
 const PV_U_FLOOR: f64 = 0.03;
 const PV_CLIP: f64 = 3.0;
 const PV_ALPHA_U: f64 = 0.02;
+/// Full windows σ_S must have been learnt from before the test speaks: its
+/// fast-start estimate is then within about 15% (1/√(2n)). Before, σ_S is
+/// the prior, which a receiver noisier than it (or a 1 Hz receiver whose
+/// fixes only rarely come close enough together to be compared) reads as
+/// a departure of 5-9 σ.
+const PV_MIN_WINDOWS: u32 = 5;
 
 impl PvTest {
     fn new(cap: usize) -> Self {
@@ -522,7 +528,7 @@ impl PvTest {
                 }
             }
         }
-        self.stat = if self.len == cap {
+        self.stat = if self.len == cap && self.learnt_s >= PV_MIN_WINDOWS {
             let z2: f64 = (0..3)
                 .map(|a| {
                     let z = self.sum[a] / self.sigma(a);

@@ -134,6 +134,15 @@ impl VelocityTrack {
         Some(core::array::from_fn(|a| d[a] - p[a]))
     }
 
+    /// The fix sits on its own velocity track: within `NEAR` σ of the
+    /// learnt baseline, once the baseline has lived `MIN_AGE_S`.
+    pub fn on_track(&self) -> bool {
+        match self.d {
+            Some(d) if self.age >= MIN_AGE_S => self.z(&d) < NEAR,
+            _ => false,
+        }
+    }
+
     /// This epoch's jump brought `d` from beyond `FAR` σ of its baseline to
     /// within `NEAR` σ: the end of a position fault.
     pub fn returned(&self) -> bool {
