@@ -57,3 +57,19 @@ fn a_clean_noisy_white_receiver_is_not_flagged_while_sigma_is_learnt() {
     let pct = r.flagged_pct();
     assert!(pct < 9.0, "flagged {pct:.2}% of its GPS epochs");
 }
+
+/// The position–velocity test speaks only once its σ has been learnt (5
+/// full windows), and a 1 Hz receiver's fixes (1.0 s apart) are compared at
+/// all. Regressions: tune #53 (fixed-wing, 2 Hz Gauss–Markov σ 2.8 m, no
+/// fault) was 6.34% flagged and eval #79 (fixed-wing, 1 Hz white σ 2.8 m,
+/// no fault) 10.77%, both by the test reading its 1 m prior σ as 5-9 σ
+/// (now 0.20% and 2.77%).
+#[test]
+fn the_position_velocity_test_waits_for_its_sigma() {
+    for (split, i, before, now) in [(Split::Tune, 53, 6.34, 1.0), (Split::Eval, 79, 10.77, 4.0)] {
+        let f = Flight::draw(split, i);
+        assert!(f.faults.is_empty());
+        let pct = battery::run(&f, &Config::default()).unwrap().flagged_pct();
+        assert!(pct < now, "{split:?} #{i}: flagged {pct:.2}% of its GPS epochs (was {before}%)");
+    }
+}
