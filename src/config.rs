@@ -299,3 +299,14 @@ mod tests {
         assert!(ConfigInput::from_json("{").unwrap_err().to_string().starts_with("config: not JSON: "));
     }
 }
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Config { method, tc, q, window, threshold, retrain, noise, outage_timeout, max_coast, data_gap } skip { model });
+    impl_codec!(FilterNoiseCfg { gps_pos_sigma, gps_alt_sigma, gps_vel_sigma, baro_sigma, accel_noise, cv_accel_noise });
+}

@@ -8,6 +8,7 @@ pub mod anfis;
 pub mod audit;
 pub mod battery;
 pub mod calibrate;
+pub mod codec;
 pub mod compare;
 pub mod config;
 pub mod detector;

@@ -12,8 +12,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 /// Modules the core builds on; none may reach a lab module.
-const CORE: [&str; 16] = [
-    "anfis", "audit", "config", "detector", "filter", "frames", "indicators", "logs", "methods", "metrics", "model", "rng",
+const CORE: [&str; 17] = [
+    "anfis", "audit", "codec", "config", "detector", "filter", "frames", "indicators", "logs", "methods", "metrics", "model", "rng",
     "sample", "snapshot", "thresholds", "track",
 ];
 /// Lab modules: simulators, the method comparison, training, tightly coupled.
