@@ -520,6 +520,119 @@ impl Residuals {
     }
 }
 
+/// A position jump is the end of a drag-off the filter had followed when
+/// the velocity jumped with it, in the same direction, by more than its
+/// noise (`DRAG_RETURN_Z` σ along the jump). A dragged receiver's position
+/// runs ahead of the truth by the drag rate times its age while its
+/// velocity runs ahead by the drag rate; when the true fix returns both
+/// fall back along the same direction, the position by `age` times as much
+/// as the velocity. A step onset leaves the velocity alone, so it is not
+/// read as a return; a filter that drifted (a stuck baro pulling its
+/// height) has a residual that grew over many epochs, not at this one.
+const DRAG_RETURN_Z: f64 = 3.0;
+/// The velocity jump's share across the position jump's direction may be
+/// at most this fraction of its share along it.
+const DRAG_RETURN_ACROSS: f64 = 1.0;
+/// Share of the position residual (along its direction) that must be new
+/// at this epoch.
+const DRAG_RETURN_NEW: f64 = 0.6;
+/// The drag's age implied by the two jumps (position / velocity along it),
+/// s: at least this, and no longer than the filter has been flying.
+const DRAG_RETURN_MIN_AGE_S: f64 = 5.0;
+
+impl Residuals {
+    /// The jump at this fix looks like the return from a drag-off the
+    /// filter followed (see [`DRAG_RETURN_Z`]): true fix back, re-anchor on
+    /// it. `flown`: time flown with the filter running, s.
+    fn drag_returned(&self, flown: f64, track_jump: Option<[f64; 3]>, sigma_dv: [f64; 3]) -> bool {
+        let (Some(vin), Some(gps_jump)) = (&self.vin, track_jump) else { return false };
+        let p = &self.pin.nu;
+        let p2: f64 = p.iter().map(|x| x * x).sum();
+        if !(p2 > 0.0) {
+            return false;
+        }
+        let norm = p2.sqrt();
+        let u: [f64; 3] = core::array::from_fn(|a| p[a] / norm);
+        let along = |x: &dyn Fn(usize) -> f64| (0..3).map(|a| x(a) * u[a]).sum::<f64>();
+        // NaN when an axis has no previous residual: then nothing is new.
+        let new_p = along(&|a| p[a] - self.prev_r[a]);
+        let moved = along(&|a| gps_jump[a]);
+        let dv: [f64; 3] = core::array::from_fn(|a| vin.nu[a] - self.prev_r[3 + a]);
+        let jump_v = along(&|a| dv[a]);
+        let sigma = (0..3).map(|a| (u[a] * sigma_dv[a]).powi(2)).sum::<f64>().sqrt();
+        let across = (0..3).map(|a| (dv[a] - jump_v * u[a]).powi(2)).sum::<f64>().sqrt();
+        let age = norm / jump_v;
+        new_p >= DRAG_RETURN_NEW * norm
+            && moved >= DRAG_RETURN_NEW * norm
+            && jump_v > DRAG_RETURN_Z * sigma
+            && across <= DRAG_RETURN_ACROSS * jump_v
+            && (DRAG_RETURN_MIN_AGE_S..=flown).contains(&age)
+    }
+}
+
+#[cfg(test)]
+mod drag_return_tests {
+    use super::*;
+
+    /// Residuals of a fix whose position residual is `p` (previous `p0`)
+    /// and velocity residual `v` (previous zero).
+    fn res(p: [f64; 3], p0: [f64; 3], v: [f64; 3]) -> Residuals {
+        let mut prev_r = [0.0; 6];
+        prev_r[..3].copy_from_slice(&p0);
+        Residuals {
+            pin: Innovation { nu: p, s: [1.0; 3] },
+            vin: Some(Innovation { nu: v, s: [0.04; 3] }),
+            prev_r,
+            r_ref: [0.0; 3],
+        }
+    }
+
+    const SIGMA_DV: [f64; 3] = [0.1; 3];
+
+    #[test]
+    fn a_position_and_velocity_jump_back_together_is_a_return() {
+        // 30 m back along north with 0.5 m/s (5 σ): a 60 s drag undone.
+        let r = res([-30.0, 0.0, 0.0], [0.2, 0.0, 0.0], [-0.5, 0.05, 0.0]);
+        assert!(r.drag_returned(100.0, Some([-30.1, 0.0, 0.0]), SIGMA_DV));
+        // The same in the vertical.
+        let r = res([0.0, 0.0, 20.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.4]);
+        assert!(r.drag_returned(100.0, Some([0.0, 0.0, 20.0]), SIGMA_DV));
+    }
+
+    #[test]
+    fn a_step_onset_or_a_pulled_filter_is_not() {
+        let track = Some([-30.0, 0.0, 0.0]);
+        // Step onset: the velocity did not jump (2 σ of noise).
+        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.2, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // The velocity jumped across the position jump, not along it.
+        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.6, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // Against it: the position ran back while the velocity ran on.
+        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // The residual grew over earlier epochs (a drifting filter).
+        assert!(!res([-30.0, 0.0, 0.0], [-25.0, 0.0, 0.0], [-0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // The GPS stayed on its own track: the filter moved (a baro pull).
+        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, Some([-0.3, 0.0, 0.0]), SIGMA_DV));
+        // No track yet, or no velocity.
+        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, None, SIGMA_DV));
+        let mut r = res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]);
+        r.vin = None;
+        assert!(!r.drag_returned(100.0, track, SIGMA_DV));
+        // NaN previous residuals (references just reset): nothing is new.
+        assert!(!res([-30.0, 0.0, 0.0], [f64::NAN; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+    }
+
+    #[test]
+    fn the_implied_drag_age_must_fit_the_flight() {
+        let track = Some([-30.0, 0.0, 0.0]);
+        // 30 m at 0.5 m/s is a 60 s drag: not after 40 s of flight.
+        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(40.0, track, SIGMA_DV));
+        assert!(res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(61.0, track, SIGMA_DV));
+        // 3 m at 1 m/s is 3 s: shorter than any drag worth re-anchoring on
+        // (a baro step pulls the filter's height and velocity like this).
+        assert!(!res([-3.0, 0.0, 0.0], [0.0; 3], [-1.0, 0.0, 0.0]).drag_returned(100.0, Some([-3.0, 0.0, 0.0]), SIGMA_DV));
+    }
+}
+
 impl LastEstimate {
     /// The residuals stage: the fix against the filter's prediction, each
     /// axis observed by the indicator engine with the change the filter
@@ -1771,7 +1884,15 @@ impl Detector {
         // Outside any episode, a jump that brings the GPS back onto its own
         // velocity track ends a position fault the filter had followed (a
         // slow ramp): re-anchor on the fix, open nothing.
-        let track_return = verdict.fault && !self.oracle && !self.episode.active && self.consistency.track.returned();
+        let track_return = verdict.fault
+            && !self.oracle
+            && !self.episode.active
+            && (self.consistency.track.returned()
+                || (self.quality.scale(fix.eph) < QUALITY_DEGRADED && res.drag_returned(
+                    self.consistency.flight_time,
+                    self.consistency.track.jump(),
+                    core::array::from_fn(|a| self.ind.sigma(3 + a)),
+                )));
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || track_return);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from

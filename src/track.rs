@@ -113,6 +113,14 @@ impl VelocityTrack {
         }
     }
 
+    /// How far the GPS position moved off its own velocity track at the
+    /// last fix, m (NED): `d − d_prev`. None before two fixes. A jump of the
+    /// receiver shows here; a filter pulled by another sensor does not.
+    pub fn jump(&self) -> Option<[f64; 3]> {
+        let (d, p) = (self.d?, self.d_prev?);
+        Some(core::array::from_fn(|a| d[a] - p[a]))
+    }
+
     /// This epoch's jump brought `d` from beyond `FAR` σ of its baseline to
     /// within `NEAR` σ: the end of a position fault.
     pub fn returned(&self) -> bool {

@@ -55,3 +55,20 @@ fn dropped_records_do_not_restart_the_track() {
         .count();
     assert!(n <= 10, "{n} epochs flagged in the 60 s after the ramp");
 }
+
+/// Regression: the end of a drag-off the filter followed (position and
+/// velocity dragged together, so neither the filter nor the track saw it)
+/// is a jump of the GPS off its own track with a velocity jump along it.
+/// It re-anchors; it used to open a 60 s step episode. Battery tune #45
+/// (hover, 10 Hz Gauss–Markov σ 1.7 m, consumer IMU, 0.84 m/s for 97 s):
+/// 396 false-positive epochs after the end; tune #70 (fixed-wing, 2 Hz,
+/// 0.66 m/s for 30 s): 119.
+#[test]
+fn the_end_of_a_followed_drag_off_opens_no_interval() {
+    for (i, before) in [(45, 396), (70, 119)] {
+        let f = Flight::draw(Split::Tune, i);
+        assert_eq!(f.faults[0].kind.name(), "drag-off", "tune #{i}");
+        let n = flagged_after(&f, 60.0);
+        assert!(n <= 10, "tune #{i}: {n} epochs flagged in the 60 s after the drag-off (was {before})");
+    }
+}
