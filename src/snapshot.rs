@@ -287,6 +287,35 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+        /// A forged body (bytes changed, cut or added, with a valid
+        /// checksum, so the decoder itself is the only guard): restore is an
+        /// error or a detector that takes rows, never a panic or a huge
+        /// allocation.
+        #[test]
+        fn forged_bodies_never_panic(at in 0.0f64..1.0, byte in any::<u8>(), cut in 0usize..40, extra in proptest::collection::vec(any::<u8>(), 0..12)) {
+            let rows = scenario();
+            let mut d = Detector::new(Config { method: crate::methods::Method::Knee, ..Config::default() }).unwrap();
+            run(&mut d, &rows[..1500]);
+            let snap = d.snapshot().unwrap();
+            let (h, body) = header(&snap).unwrap();
+            let mut body = body.to_vec();
+            let i = ((at * body.len() as f64) as usize).min(body.len() - 1);
+            body[i] = byte;
+            body.truncate(body.len().saturating_sub(cut));
+            body.extend_from_slice(&extra);
+            let forged = Header { checksum: fnv1a(&body), ..h };
+            let mut bytes = codec::to_bytes(&forged);
+            bytes.extend_from_slice(&body);
+            if let Ok(mut back) = Detector::restore(&bytes) {
+                for s in &rows[1500..1600] {
+                    let _ = back.push(s);
+                }
+            }
+        }
+    }
+
+    proptest! {
         #![proptest_config(ProptestConfig { cases: 16, ..ProptestConfig::default() })]
         /// Any split point, any scenario kind: snapshot, restore and continue
         /// give the same statuses and F values, bit for bit.
