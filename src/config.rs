@@ -207,38 +207,57 @@ impl ConfigInput {
         let serde_json::Value::Object(map) = v else {
             return Err(ConfigError::new("", "must be a JSON object"));
         };
-        for k in map.keys() {
-            Self::check_field_name(k)?;
-        }
         input_of(&map)?.check()
     }
 }
 
-/// The [`ConfigInput`] that `map` (field names checked) spells: each field
-/// `null` or absent for the default, else of its type; a type error names
-/// its field, with serde_json's message for it.
+/// The [`ConfigInput`] that `map` spells: each field `null` or absent for
+/// the default, else of its type. Fields are taken in the map's (key)
+/// order, each name checked then its value, so with several bad fields the
+/// first reported is the one serde reported; a type error names its field,
+/// with serde_json's message for it.
 fn input_of(map: &serde_json::Map<String, serde_json::Value>) -> Result<ConfigInput, ConfigError> {
     use plain::*;
-    let field = |name: &str| map.get(name).filter(|v| !v.is_null());
-    let num = |name: &'static str| field(name).map(|v| f64_of(v).map_err(|e| ConfigError::new(name, e))).transpose();
-    Ok(ConfigInput {
-        method: field("method").map(|v| string_of(v).map_err(|e| ConfigError::new("method", e))).transpose()?,
-        tc: num("tc")?,
-        q: num("q")?,
-        window: num("window")?,
-        threshold: num("threshold")?,
-        retrain: field("retrain").map(|v| bool_of(v).map_err(|e| ConfigError::new("retrain", e))).transpose()?,
-        gps_pos_sigma: num("gpsPosSigma")?,
-        gps_alt_sigma: num("gpsAltSigma")?,
-        gps_vel_sigma: num("gpsVelSigma")?,
-        baro_sigma: num("baroSigma")?,
-        accel_noise: num("accelNoise")?,
-        cv_accel_noise: num("cvAccelNoise")?,
-        outage_timeout: num("outageTimeout")?,
-        max_coast: num("maxCoast")?,
-        data_gap: num("dataGap")?,
-        model: field("model").map(|v| model_of(v).map_err(|e| ConfigError::new("model", e))).transpose()?,
-    })
+    let mut input = ConfigInput::default();
+    let i = &mut input;
+    for (k, v) in map {
+        ConfigInput::check_field_name(k)?;
+        if v.is_null() {
+            continue;
+        }
+        let e = |m| ConfigError::new(k.as_str(), m);
+        let slot = match k.as_str() {
+            "method" => {
+                i.method = Some(string_of(v).map_err(e)?);
+                continue;
+            }
+            "retrain" => {
+                i.retrain = Some(bool_of(v).map_err(e)?);
+                continue;
+            }
+            "model" => {
+                i.model = Some(model_of(v).map_err(e)?);
+                continue;
+            }
+            "tc" => &mut i.tc,
+            "q" => &mut i.q,
+            "window" => &mut i.window,
+            "threshold" => &mut i.threshold,
+            "gpsPosSigma" => &mut i.gps_pos_sigma,
+            "gpsAltSigma" => &mut i.gps_alt_sigma,
+            "gpsVelSigma" => &mut i.gps_vel_sigma,
+            "baroSigma" => &mut i.baro_sigma,
+            "accelNoise" => &mut i.accel_noise,
+            "cvAccelNoise" => &mut i.cv_accel_noise,
+            "outageTimeout" => &mut i.outage_timeout,
+            "maxCoast" => &mut i.max_coast,
+            "dataGap" => &mut i.data_gap,
+            // check_field_name let only FIELDS through.
+            _ => continue,
+        };
+        *slot = Some(f64_of(v).map_err(e)?);
+    }
+    Ok(input)
 }
 
 /// JSON data read into the config's types by hand, with the messages
@@ -459,6 +478,12 @@ mod tests {
                 cases.push(json!({ f: v }));
             }
         }
+        // Several bad fields: the first in key order, names checked as met
+        // (as the serde path did).
+        let first = |t: &str| ConfigInput::from_json(t).unwrap_err().field;
+        assert_eq!(first(r#"{"tc": "x", "retrain": 5}"#), "retrain");
+        assert_eq!(first(r#"{"aaa": 1, "tc": "x"}"#), "aaa");
+        assert_eq!(first(r#"{"method": 5, "zzz": 1}"#), "method");
         assert_eq!(
             ConfigInput::from_json(r#"{"model": [1]}"#).unwrap_err().to_string(),
             "config.model: invalid type: sequence, expected struct Model"
