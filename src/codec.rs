@@ -21,8 +21,6 @@
 //! decode is straight-line code, with no unwinding of half-built fields at
 //! every field.
 
-use std::collections::VecDeque;
-
 use nalgebra::{Quaternion, SMatrix, UnitQuaternion};
 
 /// Bytes that do not decode: what was expected and where.
@@ -297,18 +295,6 @@ impl<T: Codec> Codec for Vec<T> {
     fn decode(r: &mut Reader<'_>) -> Self {
         let n = r.len();
         (0..n).map(|_| T::decode(r)).collect()
-    }
-}
-
-impl<T: Codec> Codec for VecDeque<T> {
-    fn encode(&self, w: &mut Vec<u8>) {
-        self.len().encode(w);
-        for v in self {
-            v.encode(w);
-        }
-    }
-    fn decode(r: &mut Reader<'_>) -> Self {
-        Vec::decode(r).into()
     }
 }
 
