@@ -231,9 +231,14 @@ fn print_fp_sources(results: &[FlightResult]) {
     // After-fault FPs by the kind of the last fault that ended before them.
     let mut by_kind: std::collections::BTreeMap<&'static str, [u64; 2]> = Default::default();
     let only_true = std::env::var("FP_TRUE_CLOCK").is_ok();
+    // FPs in the first `EARLY_S` s of the log, where σ is still being learnt.
+    const EARLY_S: f64 = 30.0;
+    let mut early = 0u64;
     for r in results.iter().filter(|r| !only_true || r.flight.clock.rate == 1.0) {
         let f = &r.flight;
+        let t0 = r.epochs.first().map_or(0.0, |e| e.t);
         for e in r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0) {
+            early += u64::from(e.t - t0 < EARLY_S);
             let last = f.faults.iter().filter(|ft| e.t >= ft.end_log).max_by(|a, b| a.end_log.total_cmp(&b.end_log));
             let slot = if f.faults.is_empty() {
                 0
@@ -254,5 +259,6 @@ fn print_fp_sources(results: &[FlightResult]) {
     println!("\n### False-positive epochs by where they lie\n\n| clean flights | before the first fault | ≤ {} s after a fault | later | total |\n|---|---|---|---|---|", battery::AFTER_WINDOW);
     let cell = |k: u64| format!("{k} ({:.0}%)", 100.0 * k as f64 / total);
     println!("| {} | {} | {} | {} | {} |", cell(n[0]), cell(n[1]), cell(n[2]), cell(n[3]), n.iter().sum::<u64>());
+    println!("\nIn the first {EARLY_S} s of the log (any column): {}", cell(early));
     println!("\nAfter a fault, by the kind of the fault that ended last (≤ {} s / later): {}", battery::AFTER_WINDOW, by_kind.iter().map(|(k, v)| format!("{k} {}/{}", v[0], v[1])).collect::<Vec<_>>().join(", "));
 }

@@ -622,6 +622,22 @@ mod drag_return_tests {
     }
 
     #[test]
+    fn a_jump_undoes_an_offset_only_by_most_of_it_along_it() {
+        let off = [10.0, 5.0, 0.0];
+        assert!(undoes(&[-10.0, -5.0, 0.0], &off, 0.0));
+        // Plus the drift since the re-anchoring (ramp): 1.3 of it.
+        assert!(undoes(&[-13.0, -6.5, 1.0], &off, 0.0));
+        assert!(!undoes(&[-4.0, -2.0, 0.0], &off, 0.0), "0.4 of it");
+        assert!(!undoes(&[-16.0, -8.0, 0.0], &off, 0.0), "1.6 of it");
+        assert!(!undoes(&[10.0, 5.0, 0.0], &off, 0.0), "away from it");
+        assert!(!undoes(&[5.0, -10.0, 0.0], &off, 0.0), "across it");
+        // Shorter than the noise floor, or nothing to undo.
+        assert!(!undoes(&[-10.0, -5.0, 0.0], &off, 200.0));
+        assert!(!undoes(&[-10.0, -5.0, 0.0], &[0.0; 3], 0.0));
+        assert!(!undoes(&[f64::NAN; 3], &off, 0.0));
+    }
+
+    #[test]
     fn the_implied_drag_age_must_fit_the_flight() {
         let track = Some([-30.0, 0.0, 0.0]);
         // 30 m at 0.5 m/s is a 60 s drag: not after 40 s of flight.
@@ -1305,6 +1321,10 @@ struct Episode {
     /// Consecutive normal GPS verdicts.
     normal_run: u32,
     withheld: Withheld,
+    /// The position offset (m, NED) a position-only episode re-anchored
+    /// onto when it coasted out: the fault the filter stopped judging. A
+    /// later jump that undoes it is that fault's end, not a new one.
+    accepted: Option<[f64; 3]>,
 }
 
 /// What the episode stage decided at a GPS epoch.
@@ -1314,6 +1334,17 @@ struct EpisodeStep {
     fault: bool,
     /// Re-anchor the filter on this fix (coasted too long, or recovered).
     reset: bool,
+}
+
+/// `jump` (m) takes back most of `off` (m, more than `min2` m² long)
+/// along its direction: between `RETURN_UNDONE` of it.
+fn undoes(jump: &[f64; 3], off: &[f64; 3], min2: f64) -> bool {
+    let off2: f64 = off.iter().map(|x| x * x).sum();
+    if !(off2 > min2 && off2 > 0.0) {
+        return false;
+    }
+    let undone = -(0..3).map(|a| jump[a] * off[a]).sum::<f64>() / off2;
+    (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone)
 }
 
 impl Episode {
@@ -1379,7 +1410,14 @@ impl Episode {
             self.receiver_lost = true;
         }
         let coasted_out = t - start > self.coast_limit(max_coast);
-        let ended = !oracle && (self.recovered(t - start, ev, oracle) || self.returned(ev));
+        let returned = !oracle && self.returned(ev);
+        let ended = !oracle && (self.recovered(t - start, ev, oracle) || returned);
+        if returned {
+            self.accepted = None;
+        }
+        if coasted_out && !ended && self.withheld.gps_pos() && !self.receiver_lost && !self.imu {
+            self.accepted = Some(ev.res.pin.nu);
+        }
         EpisodeStep { fault: !ended, reset: coasted_out || ended }
     }
 
@@ -1399,21 +1437,27 @@ impl Episode {
     /// most of the offset along its direction (projecting ignores the
     /// estimate's drift across it, such as its height while a horizontal
     /// step is withheld). The GPS is the truth again: re-anchor on it
-    /// rather than read the estimate's coast drift as a new fault.
+    /// rather than read the estimate's coast drift as a new fault. The
+    /// offset is the one since the episode began or, when an earlier
+    /// episode of the same fault coasted out and re-anchored onto the
+    /// faulty fix, that one's offset added to it.
     fn returned(&self, ev: &Evidence) -> bool {
         if !self.withheld.gps_pos() || self.receiver_lost || self.imu {
             return false;
         }
         let res = ev.res;
-        let off: [f64; 3] = core::array::from_fn(|a| res.prev_r[a] - res.r_ref[a]);
+        let since: [f64; 3] = core::array::from_fn(|a| res.prev_r[a] - res.r_ref[a]);
         let jump: [f64; 3] = core::array::from_fn(|a| res.pin.nu[a] - res.prev_r[a]);
-        let off2: f64 = off.iter().map(|x| x * x).sum();
-        let sigma2: f64 = ev.sigma_pos.iter().map(|x| x * x).sum();
-        if !(off2 > RETURN_MIN_SIGMAS * RETURN_MIN_SIGMAS * sigma2) {
-            return false;
-        }
-        let undone = -(0..3).map(|a| jump[a] * off[a]).sum::<f64>() / off2;
-        (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone)
+        let min2 = RETURN_MIN_SIGMAS * RETURN_MIN_SIGMAS * ev.sigma_pos.iter().map(|x| x * x).sum::<f64>();
+        let with_accepted = self.accepted.map(|acc| core::array::from_fn(|a| since[a] + acc[a]));
+        [Some(since), with_accepted].into_iter().flatten().any(|off| undoes(&jump, &off, min2))
+    }
+
+    /// Outside any episode: the GPS jumped back by most of the offset a
+    /// coasted-out position episode re-anchored onto: the fault it stopped
+    /// judging ended.
+    fn undone(&self, res: &Residuals) -> bool {
+        self.accepted.is_some_and(|off| undoes(&res.pin.nu, &off, 0.0))
     }
 
     /// Whether the episode, `elapsed` s old, is over and the filter should
@@ -1884,15 +1928,26 @@ impl Detector {
         // Outside any episode, a jump that brings the GPS back onto its own
         // velocity track ends a position fault the filter had followed (a
         // slow ramp): re-anchor on the fix, open nothing.
-        let track_return = verdict.fault
-            && !self.oracle
-            && !self.episode.active
-            && (self.consistency.track.returned()
-                || (self.quality.scale(fix.eph) < QUALITY_DEGRADED && res.drag_returned(
-                    self.consistency.flight_time,
-                    self.consistency.track.jump(),
-                    core::array::from_fn(|a| self.ind.sigma(3 + a)),
-                )));
+        let judge_return = verdict.fault && !self.oracle && !self.episode.active;
+        let undone = judge_return && self.episode.undone(&res);
+        if undone {
+            self.episode.accepted = None;
+        }
+        let track_return = judge_return && (self.consistency.track.returned() || undone);
+        // Or the end of a drag-off the filter followed: the GPS left its
+        // track with its velocity jumping along (see `drag_returned`).
+        let drag_return = judge_return
+            && !track_return
+            && self.quality.scale(fix.eph) < QUALITY_DEGRADED
+            && res.drag_returned(
+                self.consistency.flight_time,
+                self.consistency.track.jump(),
+                core::array::from_fn(|a| self.ind.sigma(3 + a)),
+            );
+        if drag_return {
+            self.consistency.track.rebase();
+        }
+        let track_return = track_return || drag_return;
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || track_return);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from

@@ -51,8 +51,10 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// its two scales (fast start). 5: the receiver clock keeps the last new
 /// fix's fields (a frozen receiver's repeats are not epochs), and the
 /// detector learns the receiver's usual accuracy claim. 6: the boot-clock
-/// rate's fit against the receiver's own time (`gps_time`).
-pub const VERSION: u32 = 6;
+/// rate's fit against the receiver's own time (`gps_time`). 7: a
+/// position episode keeps the offset it re-anchored onto when it coasted
+/// out.
+pub const VERSION: u32 = 7;
 
 #[derive(Clone)]
 struct Header {

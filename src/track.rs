@@ -113,6 +113,19 @@ impl VelocityTrack {
         }
     }
 
+    /// The last fix's jump off the track is the truth coming back (the end
+    /// of a drag-off, whose position and velocity moved together so `d`
+    /// held still through it): move the baseline with it, so the fixes
+    /// after it are not read as outlying.
+    pub fn rebase(&mut self) {
+        if let Some(j) = self.jump() {
+            for a in 0..3 {
+                self.base[a] += j[a];
+            }
+            self.outlying = 0.0;
+        }
+    }
+
     /// How far the GPS position moved off its own velocity track at the
     /// last fix, m (NED): `d − d_prev`. None before two fixes. A jump of the
     /// receiver shows here; a filter pulled by another sensor does not.
@@ -170,6 +183,33 @@ mod tests {
             [w[0], w[1] + 10.0, w[2]]
         };
         assert!(!run(&mut tr, 1100, 300, &step).iter().any(|r| *r));
+    }
+
+    /// After a drag-off's end (rebased), the fixes at the new level are the
+    /// track: a later jump back to the drag's level is not a "return".
+    #[test]
+    fn a_rebased_track_follows_the_jump() {
+        let wander = |t: f64| [0.8 * (t / 13.0).sin(), 0.8 * (t / 17.0).cos(), 1.5 * (t / 11.0).sin()];
+        let shifted = |t: f64| {
+            let w = wander(t);
+            [w[0] - 30.0, w[1], w[2]]
+        };
+        for rebase in [false, true] {
+            let mut tr = VelocityTrack::default();
+            run(&mut tr, 0, 600, &wander);
+            tr.step(0.1, shifted(60.0), [0.0; 3], [0.0; 3]);
+            let j = tr.jump().unwrap();
+            assert!((j[0] + 30.0).abs() < 0.5 && j[1].abs() < 0.5, "{j:?}");
+            if rebase {
+                tr.rebase();
+            }
+            let mut follow = run(&mut tr, 601, 200, &shifted);
+            follow.extend(run(&mut tr, 801, 1, &wander));
+            // Not rebased: the track still holds the old level, and the
+            // jump back to it reads as a return.
+            assert_eq!(follow.last(), Some(&!rebase), "rebase {rebase}");
+            assert!(!follow[..200].iter().any(|r| *r), "rebase {rebase}");
+        }
     }
 
     #[test]

@@ -72,3 +72,18 @@ fn the_end_of_a_followed_drag_off_opens_no_interval() {
         assert!(n <= 10, "tune #{i}: {n} epochs flagged in the 60 s after the drag-off (was {before})");
     }
 }
+
+/// A position fault that outlasts the position coast (60 s) is re-anchored
+/// onto; its end, a jump back by about that offset (plus any drift since),
+/// is the fault's end, not a new one. Battery tune #11 (fixed-wing, 2 Hz: a
+/// 16 m vertical step for 75 s) and tune #119 (hover, 1 Hz: a 0.55 m/s
+/// ramp for 50 s, the episode after the re-anchoring still open at its
+/// end): each flagged a new 60 s interval after the fault.
+#[test]
+fn the_end_of_a_fault_that_coasted_out_opens_no_interval() {
+    for i in [11, 119] {
+        let f = Flight::draw(Split::Tune, i);
+        let n = flagged_after(&f, 60.0);
+        assert!(n <= 10, "tune #{i} ({}): {n} epochs flagged in the 60 s after it", f.faults[0].kind.name());
+    }
+}
