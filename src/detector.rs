@@ -2619,6 +2619,6 @@ mod codec_impls {
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });
     impl_codec!(Methods { prev_nu, maha, baro_inn, pool });
     impl_codec!(Withheld { groups, baro_calm });
-    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld });
+    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted });
     impl_codec!(Learning { anfis, d1, d2, new_faults, d0_x, d0_y } skip { train_x, train_y, cost });
 }

@@ -261,7 +261,7 @@ mod tests {
     }
 
     /// The codec writes exactly what postcard wrote from serde's derives of
-    /// the same structs (the format of versions up to 6): a field the
+    /// the same structs (the format before the codec): a field the
     /// codec's lists reorder shows here, for every method, mid-run and after
     /// a long run (every Option filled, rings wrapped, retrains done). A
     /// field they leave out does not compile. The restored detector is the
