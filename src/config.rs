@@ -200,19 +200,187 @@ impl ConfigInput {
     }
 
     /// Check a config given as JSON data (the wasm facade copies a JS
-    /// object into this form first, reading every field once).
+    /// object into this form first, reading every field once). Each field
+    /// is read by hand ([`input_of`]), not by serde's derive: the core wasm
+    /// module then carries no deserializer; the messages are serde's.
     pub fn from_value(v: serde_json::Value) -> Result<Config, ConfigError> {
         let serde_json::Value::Object(map) = v else {
             return Err(ConfigError::new("", "must be a JSON object"));
         };
-        // Field by field first, so a type error names its field.
-        for (k, val) in &map {
-            Self::check_field_name(k)?;
-            let one = serde_json::Value::Object([(k.clone(), val.clone())].into_iter().collect());
-            serde_json::from_value::<ConfigInput>(one).map_err(|e| ConfigError::new(k.as_str(), e.to_string()))?;
+        input_of(&map)?.check()
+    }
+}
+
+/// The [`ConfigInput`] that `map` spells: each field `null` or absent for
+/// the default, else of its type. Fields are taken in the map's (key)
+/// order, each name checked then its value, so with several bad fields the
+/// first reported is the one serde reported; a type error names its field,
+/// with serde_json's message for it.
+fn input_of(map: &serde_json::Map<String, serde_json::Value>) -> Result<ConfigInput, ConfigError> {
+    use plain::*;
+    let mut input = ConfigInput::default();
+    let i = &mut input;
+    for (k, v) in map {
+        ConfigInput::check_field_name(k)?;
+        if v.is_null() {
+            continue;
         }
-        let input: ConfigInput = serde_json::from_value(serde_json::Value::Object(map)).map_err(|e| ConfigError::new("", e.to_string()))?;
-        input.check()
+        let e = |m| ConfigError::new(k.as_str(), m);
+        let slot = match k.as_str() {
+            "method" => {
+                i.method = Some(string_of(v).map_err(e)?);
+                continue;
+            }
+            "retrain" => {
+                i.retrain = Some(bool_of(v).map_err(e)?);
+                continue;
+            }
+            "model" => {
+                i.model = Some(model_of(v).map_err(e)?);
+                continue;
+            }
+            "tc" => &mut i.tc,
+            "q" => &mut i.q,
+            "window" => &mut i.window,
+            "threshold" => &mut i.threshold,
+            "gpsPosSigma" => &mut i.gps_pos_sigma,
+            "gpsAltSigma" => &mut i.gps_alt_sigma,
+            "gpsVelSigma" => &mut i.gps_vel_sigma,
+            "baroSigma" => &mut i.baro_sigma,
+            "accelNoise" => &mut i.accel_noise,
+            "cvAccelNoise" => &mut i.cv_accel_noise,
+            "outageTimeout" => &mut i.outage_timeout,
+            "maxCoast" => &mut i.max_coast,
+            "dataGap" => &mut i.data_gap,
+            // check_field_name let only FIELDS through.
+            _ => continue,
+        };
+        *slot = Some(f64_of(v).map_err(e)?);
+    }
+    Ok(input)
+}
+
+/// JSON data read into the config's types by hand, with the messages
+/// serde_json gives for the same data (a test holds them to serde's).
+mod plain {
+    use serde_json::Value;
+
+    use crate::anfis::Anfis;
+    use crate::model::Model;
+
+    /// How serde_json names a value it did not expect.
+    fn unexpected(v: &Value) -> String {
+        match v {
+            Value::Null => "null".into(),
+            Value::Bool(b) => format!("boolean `{b}`"),
+            Value::Number(n) => match (n.as_u64(), n.as_i64(), n.as_f64()) {
+                (Some(u), _, _) => format!("integer `{u}`"),
+                (_, Some(i), _) => format!("integer `{i}`"),
+                (_, _, x) => format!("floating point `{}`", float_text(x.unwrap_or(f64::NAN))),
+            },
+            Value::String(s) => format!("string {s:?}"),
+            Value::Array(_) => "sequence".into(),
+            Value::Object(_) => "map".into(),
+        }
+    }
+
+    /// A float as serde_json writes it in messages: the shortest digits,
+    /// fixed for decimal exponents -5..=15 (`1000.0`, `0.00001`), else
+    /// `1.5e+16`, `1e-7`.
+    fn float_text(x: f64) -> String {
+        let sci = format!("{:e}", x.abs());
+        let (mant, exp) = sci.split_once('e').unwrap_or((&sci, "0"));
+        let exp: i32 = exp.parse().unwrap_or(0);
+        let digits: String = mant.chars().filter(char::is_ascii_digit).collect();
+        let n = digits.len() as i32;
+        let sign = if x.is_sign_negative() { "-" } else { "" };
+        let body = if (-5..=15).contains(&exp) {
+            if n - 1 <= exp {
+                format!("{digits}{}.0", "0".repeat((exp - (n - 1)) as usize))
+            } else if exp >= 0 {
+                let (a, b) = digits.split_at(exp as usize + 1);
+                format!("{a}.{b}")
+            } else {
+                format!("0.{}{digits}", "0".repeat((-exp - 1) as usize))
+            }
+        } else {
+            let (a, b) = digits.split_at(1);
+            let dot = if b.is_empty() { String::new() } else { format!(".{b}") };
+            format!("{a}{dot}e{}{}", if exp >= 0 { "+" } else { "-" }, exp.abs())
+        };
+        format!("{sign}{body}")
+    }
+
+    fn invalid(v: &Value, expected: &str) -> String {
+        format!("invalid type: {}, expected {expected}", unexpected(v))
+    }
+
+    pub fn f64_of(v: &Value) -> Result<f64, String> {
+        v.as_f64().ok_or_else(|| invalid(v, "f64"))
+    }
+
+    pub fn string_of(v: &Value) -> Result<String, String> {
+        v.as_str().map(str::to_string).ok_or_else(|| invalid(v, "a string"))
+    }
+
+    pub fn bool_of(v: &Value) -> Result<bool, String> {
+        v.as_bool().ok_or_else(|| invalid(v, "a boolean"))
+    }
+
+    /// `[f64; N]`: elements first, then the length (as serde reads them).
+    fn array_of<const N: usize>(v: &Value) -> Result<[f64; N], String> {
+        let Value::Array(a) = v else { return Err(invalid(v, &format!("an array of length {N}"))) };
+        let mut out = [0.0; N];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = f64_of(a.get(i).ok_or_else(|| format!("invalid length {i}, expected an array of length {N}"))?)?;
+        }
+        if a.len() > N {
+            return Err(format!("invalid length {}, expected fewer elements in array", a.len()));
+        }
+        Ok(out)
+    }
+
+    /// `[[f64; N]; K]`.
+    fn rows_of<const N: usize, const K: usize>(v: &Value) -> Result<[[f64; N]; K], String> {
+        let Value::Array(a) = v else { return Err(invalid(v, &format!("an array of length {K}"))) };
+        let mut out = [[0.0; N]; K];
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = array_of(a.get(i).ok_or_else(|| format!("invalid length {i}, expected an array of length {K}"))?)?;
+        }
+        if a.len() > K {
+            return Err(format!("invalid length {}, expected fewer elements in array", a.len()));
+        }
+        Ok(out)
+    }
+
+    fn pairs_of(v: &Value) -> Result<Vec<[f64; 2]>, String> {
+        let Value::Array(a) = v else { return Err(invalid(v, "a sequence")) };
+        a.iter().map(array_of).collect()
+    }
+
+    /// A struct's fields: those present read in key order (serde_json's
+    /// map order), then the first missing one in declaration order.
+    fn required<T>(v: Option<T>, name: &str) -> Result<T, String> {
+        v.ok_or_else(|| format!("missing field `{name}`"))
+    }
+
+    fn anfis_of(v: &Value) -> Result<Anfis, String> {
+        let Value::Object(m) = v else { return Err(invalid(v, "struct Anfis")) };
+        // Key order: centre, conseq, sigma.
+        let centre = m.get("centre").map(rows_of).transpose()?;
+        let conseq = m.get("conseq").map(rows_of).transpose()?;
+        let sigma = m.get("sigma").map(rows_of).transpose()?;
+        Ok(Anfis { centre: required(centre, "centre")?, sigma: required(sigma, "sigma")?, conseq: required(conseq, "conseq")? })
+    }
+
+    pub fn model_of(v: &Value) -> Result<Model, String> {
+        let Value::Object(m) = v else { return Err(invalid(v, "struct Model")) };
+        // Key order: anfis, d1, d2, provenance (declaration order too).
+        let anfis = m.get("anfis").map(anfis_of).transpose()?;
+        let d1 = m.get("d1").map(pairs_of).transpose()?;
+        let d2 = m.get("d2").map(pairs_of).transpose()?;
+        let provenance = m.get("provenance").map(string_of).transpose()?.unwrap_or_default();
+        Ok(Model { anfis: required(anfis, "anfis")?, d1: required(d1, "d1")?, d2: required(d2, "d2")?, provenance })
     }
 }
 
@@ -271,6 +439,93 @@ mod tests {
         assert_eq!(ConfigInput::from_json("{}").unwrap(), Config::default());
     }
 
+    /// The hand-written reader gives what serde's derive of `ConfigInput`
+    /// gave (the reader before it): the same config, or the same message,
+    /// for every field's wrong types and a model broken every way.
+    #[test]
+    fn hand_reader_matches_serde() {
+        use serde_json::{json, Value};
+        let model: Value = serde_json::from_str(include_str!("default_model.json")).unwrap();
+        let with = |path: &[&str], v: Value| {
+            let mut m = model.clone();
+            let mut at = &mut m;
+            for k in &path[..path.len() - 1] {
+                at = match k.parse::<usize>() {
+                    Ok(i) => &mut at[i],
+                    Err(_) => &mut at[*k],
+                };
+            }
+            let last = path[path.len() - 1];
+            match (last.parse::<usize>(), at) {
+                (Ok(i), Value::Array(a)) => a[i] = v,
+                (_, Value::Object(o)) if v.is_null() && last.starts_with('-') => {
+                    o.remove(&last[1..]);
+                }
+                (_, Value::Object(o)) => {
+                    o.insert(last.to_string(), v);
+                }
+                _ => panic!("bad path {path:?}"),
+            }
+            m
+        };
+        let bad_values = [json!(5), json!(-5), json!(5.5), json!(1e300), json!(-1.5e16), json!(1.25e15), json!(0.00001), json!(1.5e-7), json!(-0.000123), json!(true), json!("x\"y"), json!([1]), json!({"a": 1}), json!(null)];
+        let mut cases = vec![];
+        for f in ConfigInput::FIELDS {
+            // One deliberate difference: serde also read a struct from an
+            // array of its fields in order; the hand reader wants the
+            // object (`invalid type: sequence, expected struct Model`).
+            for v in bad_values.iter().filter(|v| !(f == "model" && v.is_array())) {
+                cases.push(json!({ f: v }));
+            }
+        }
+        // Several bad fields: the first in key order, names checked as met
+        // (as the serde path did).
+        let first = |t: &str| ConfigInput::from_json(t).unwrap_err().field;
+        assert_eq!(first(r#"{"tc": "x", "retrain": 5}"#), "retrain");
+        assert_eq!(first(r#"{"aaa": 1, "tc": "x"}"#), "aaa");
+        assert_eq!(first(r#"{"method": 5, "zzz": 1}"#), "method");
+        assert_eq!(
+            ConfigInput::from_json(r#"{"model": [1]}"#).unwrap_err().to_string(),
+            "config.model: invalid type: sequence, expected struct Model"
+        );
+        for v in [
+            with(&["anfis", "centre", "0"], json!([1, 2])),
+            with(&["anfis", "centre", "0"], json!([1, 2, 3, 4])),
+            with(&["anfis", "centre", "1", "2"], json!("x")),
+            with(&["anfis", "sigma"], json!([[1, 2, 3]])),
+            with(&["anfis", "sigma"], json!([[1, 2, 3], [1, 2, 3], [1, 2, 3]])),
+            with(&["anfis", "-conseq"], json!(null)),
+            with(&["anfis", "-centre"], json!(null)),
+            with(&["anfis", "conseq"], json!(7)),
+            with(&["anfis", "-centre"], json!(null)),
+            with(&["d1", "3"], json!([1, 2, 3])),
+            with(&["d1", "3"], json!([1])),
+            with(&["d1", "3"], json!({})),
+            with(&["d2"], json!({})),
+            with(&["-d2"], json!(null)),
+            with(&["-anfis"], json!(null)),
+            with(&["-provenance"], json!(null)),
+            with(&["provenance"], json!(null)),
+            with(&["provenance"], json!(5)),
+            with(&["extra"], json!([1, 2])),
+            with(&["d1"], json!([])),
+            model.clone(),
+        ] {
+            cases.push(json!({ "model": v, "tc": 3 }));
+        }
+        cases.push(json!({ "method": "chi2", "tc": 7, "q": 20, "retrain": false, "outageTimeout": 2.5, "model": null }));
+        for case in cases {
+            let ours = ConfigInput::from_value(case.clone());
+            let serde = serde_json::from_value::<ConfigInput>(case.clone()).map_err(|e| e.to_string());
+            match (&ours, serde) {
+                (Ok(c), Ok(input)) => assert_eq!(Ok(c.clone()), input.check(), "{case}"),
+                (Err(e), Err(m)) => assert_eq!(e.message, m, "{case}"),
+                (Err(e), Ok(input)) => assert_eq!(Err(e.clone()), input.check(), "{case}"),
+                (Ok(_), Err(m)) => panic!("{case}: serde refused it ({m}), the hand reader did not"),
+            }
+        }
+    }
+
     #[test]
     fn errors_name_field_and_value() {
         let e = ConfigInput::from_json(r#"{"tc": 0}"#).unwrap_err();
@@ -298,4 +553,15 @@ mod tests {
         assert_eq!(ConfigInput::from_json("[1]").unwrap_err().to_string(), "config: must be a JSON object");
         assert!(ConfigInput::from_json("{").unwrap_err().to_string().starts_with("config: not JSON: "));
     }
+}
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Config { method, tc, q, window, threshold, retrain, noise, outage_timeout, max_coast, data_gap } skip { model });
+    impl_codec!(FilterNoiseCfg { gps_pos_sigma, gps_alt_sigma, gps_vel_sigma, baro_sigma, accel_noise, cv_accel_noise });
 }

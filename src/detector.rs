@@ -2608,3 +2608,28 @@ mod tests {
         assert!((k * rate - 1.0).abs() < 1e-4, "final scale {k}");
     }
 }
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Output { t, status, f, r, c, kind, gps_epoch, driver });
+    impl_codec!(Stats { rows, gps_epochs, imu_rows, baro_rows, retrains, filter_resets, data_gaps, filter_errors });
+    impl_codec!(Ring { buf, head, len });
+    impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle });
+    impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run });
+    impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
+    impl_codec!(ImuNoise { prev, psd });
+    impl_codec!(LastEstimate { pos, vel, baro_h });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track });
+    impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
+    impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
+    impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });
+    impl_codec!(Methods { prev_nu, maha, baro_inn, pool });
+    impl_codec!(Withheld { groups, baro_calm });
+    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted });
+    impl_codec!(Learning { anfis, d1, d2, new_faults, d0_x, d0_y } skip { train_x, train_y, cost });
+}

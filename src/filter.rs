@@ -764,3 +764,16 @@ mod tests {
         }
     }
 }
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(FilterNoise { accel, cv_accel, accel_bias_rw, baro_rw, gps_pos_h, gps_pos_v, gps_vel, baro });
+    impl_codec!(ImuInput { f_body, q });
+    impl_codec!(Pending { t, phi_pb, phi_vb, q11, q12, q22, qb, qbaro });
+    impl_codec!(Kf { x, P, noise, baro_initialised, pending, hold_bias, accel_psd });
+}

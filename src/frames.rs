@@ -104,3 +104,13 @@ mod tests {
         assert_abs_diff_eq!(a.lla_to_ned(47.3977, 8.5466, 488.0)[1], 75.45, epsilon = 0.1);
     }
 }
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Anchor { lla, rn, re });
+}

@@ -1417,3 +1417,19 @@ mod tests {
         assert!(l.recent(10.0).is_nan());
     }
 }
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(SlidingSum { buf, head, len, total, since_resum });
+    impl_codec!(Indicators { r, c, r_group, c_group, inc_group, pv, baro_cons, imu, r_imu });
+    impl_codec!(AxisState { prev, r_ref, p_ref, p_peak, ms, last_r, has_prev, has_ref, learnt });
+    impl_codec!(IndicatorSettings { window, floor, initial, alpha });
+    impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded });
+    impl_codec!(PvTest { ring, head, len, sum, since_resum, ms, ms_u, last_u, inc, inc_len, inc_head, inc_cap, stat, learnt_u, learnt_s });
+    impl_codec!(LagTest<const D: usize> { ring, head, len, span, ms, floor, alpha, hold, rate, tau, t_rate, last_s, last_dt, last_t, learnt, fast_start });
+}

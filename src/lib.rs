@@ -8,6 +8,7 @@ pub mod anfis;
 pub mod audit;
 pub mod battery;
 pub mod calibrate;
+pub mod codec;
 pub mod compare;
 pub mod config;
 pub mod detector;
@@ -15,12 +16,10 @@ pub mod error;
 pub mod filter;
 pub mod frames;
 pub mod indicators;
-pub mod logs;
 pub mod methods;
 pub mod metrics;
 pub mod model;
 pub mod rng;
-pub mod sample;
 pub mod sim;
 pub mod thresholds;
 pub mod tight;
@@ -29,6 +28,11 @@ pub mod snapshot;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
+
+/// The log readers (crate `navguard-logs`, built for size in the core wasm
+/// module).
+pub use navguard_logs as logs;
+pub use navguard_logs::sample;
 
 pub use config::{Config, ConfigError, ConfigInput};
 pub use detector::{Detector, InputError, Output};

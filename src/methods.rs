@@ -363,7 +363,8 @@ impl PoolState {
 }
 
 /// The pools of `rms`, `knee` and `adaptive` (in that order), as shipped in
-/// `src/default_pools.bin` (postcard, so every f64 is bit-exact). They were
+/// `src/default_pools.bin` ([`crate::codec`] bytes, postcard's, so every
+/// f64 is bit-exact). They were
 /// fitted on clean simulated flights by [`crate::calibrate::fit_pools`] over
 /// seeds [`POOL_SEEDS`]; a test refits them and compares the bytes.
 pub const EMBEDDED_POOLS: &[u8] = include_bytes!("default_pools.bin");
@@ -384,7 +385,7 @@ pub fn default_pool(method: Method) -> Result<PoolState, String> {
         m => return Err(format!("method \"{}\" has no threshold pool", m.name())),
     };
     let pools = POOLS
-        .get_or_init(|| postcard::from_bytes(EMBEDDED_POOLS).map_err(|e| format!("embedded threshold pools: {e}")))
+        .get_or_init(|| crate::codec::from_bytes(EMBEDDED_POOLS).map_err(|e| format!("embedded threshold pools: {e}")))
         .as_ref()
         .map_err(|e| e.clone())?;
     Ok(pools[k].clone())
@@ -505,4 +506,16 @@ mod tests {
         let e = Method::parse("magic").unwrap_err().to_string();
         assert!(e.contains("config.method") && e.contains("magic") && e.contains("\"knee\""), "{e}");
     }
+}
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::{impl_codec, impl_codec_enum};
+
+    impl_codec_enum!(Method { Anfis = 0, Chi2 = 1, Nis = 2, Gate = 3, Mahalanobis = 4, Rms = 5, Knee = 6, Adaptive = 7 });
+    impl_codec!(MahaWindow { ring, head, len, sum, sq, since_resum });
+    impl_codec!(PoolState { bands, eval });
 }

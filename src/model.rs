@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::anfis::Anfis;
 
-/// The shipped model in postcard (every f64 bit-exact): the model that
+/// The shipped model in [`crate::codec`] bytes (postcard's; every f64
+/// bit-exact): the model that
 /// serde_json reads from `src/default_model.json` (what `navguard-train`
 /// writes, readable and diffable), stored as binary so that a build without
 /// serde_json (the core wasm module) carries 16 KB instead of 42 KB of JSON
@@ -15,11 +16,12 @@ use crate::anfis::Anfis;
 /// files to each other; `navguard-train` writes both.
 pub const EMBEDDED_MODEL: &[u8] = include_bytes!("default_model.bin");
 
-/// The binary form of a model as shipped: postcard of the model that
-/// `json` (a trained model, as `navguard-train` writes it) parses to.
+/// The binary form of a model as shipped: the [`crate::codec`] bytes of
+/// the model that `json` (a trained model, as `navguard-train` writes it)
+/// parses to.
 pub fn binary_of_json(json: &str) -> Result<Vec<u8>, String> {
     let m: Model = serde_json::from_str(json).map_err(|e| format!("model JSON: {e}"))?;
-    postcard::to_allocvec(&m).map_err(|e| format!("model: {e}"))
+    Ok(crate::codec::to_bytes(&m))
 }
 
 /// A trained model: ANFIS parameters plus the initial databases D1₀, D2₀.
@@ -41,7 +43,7 @@ impl Model {
     /// Decoded once per process from [`EMBEDDED_MODEL`], then cloned.
     pub fn embedded() -> Result<Model, String> {
         static EMBEDDED: std::sync::OnceLock<Result<Model, String>> = std::sync::OnceLock::new();
-        EMBEDDED.get_or_init(|| postcard::from_bytes(EMBEDDED_MODEL).map_err(|e| format!("embedded model: {e}"))).clone()
+        EMBEDDED.get_or_init(|| crate::codec::from_bytes(EMBEDDED_MODEL).map_err(|e| format!("embedded model: {e}"))).clone()
     }
 
     /// Grid-initialised ANFIS with a plain R ramp, used only to drive the
@@ -100,6 +102,8 @@ mod tests {
             std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/src/default_model.bin"), &bytes).unwrap();
         }
         assert!(bytes == EMBEDDED_MODEL, "src/default_model.bin differs from src/default_model.json");
+        // The codec writes postcard's bytes (the file's first writer).
+        assert!(postcard::to_allocvec(&serde_json::from_str::<Model>(json).unwrap()).unwrap() == EMBEDDED_MODEL);
         let from_json: Model = serde_json::from_str(json).unwrap();
         let shipped = Model::embedded().unwrap();
         assert_eq!(shipped, from_json);
@@ -109,4 +113,14 @@ mod tests {
         assert_eq!(shipped.d1.len(), 500);
         assert!(shipped.check().is_ok());
     }
+}
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Model { anfis, d1, d2, provenance });
 }

@@ -1219,3 +1219,55 @@ mod props {
         }
     }
 }
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::{impl_codec, impl_codec_enum, Codec, Reader};
+
+    impl_codec_enum!(Method { Rt = 0, Kt = 1, At = 2 });
+    impl_codec!(RmsThreshold { w, window_rms, mean_rms });
+    impl_codec!(NormalityModel { w, psi, chi, rho, sigma });
+    impl_codec!(KneeThreshold { model, knee_index, rho, sigma });
+    impl_codec!(AdaptiveConfig { w, psi, probe_gain, probe_len, beta, u_floor });
+    impl_codec!(AdaptiveThreshold { config, model, uncertainty, detectability, u, a, p, c, x_m, x_star, clamped, rho, sigma });
+    impl_codec!(ThresholdPool { method, w, modes });
+    impl_codec!(SpeedBands { edges });
+    impl_codec!(TwoStage { w, r, anomalous, confirmed, head, len, count, rho });
+    impl_codec!(Evaluator { pool, core, sumsq, since_refresh });
+
+    /// Externally tagged, as serde numbers it: the variant index, then the
+    /// threshold.
+    impl Codec for ModeThreshold {
+        fn encode(&self, w: &mut Vec<u8>) {
+            match self {
+                ModeThreshold::Rt(t) => {
+                    0u32.encode(w);
+                    t.encode(w);
+                }
+                ModeThreshold::Kt(t) => {
+                    1u32.encode(w);
+                    t.encode(w);
+                }
+                ModeThreshold::At(t) => {
+                    2u32.encode(w);
+                    t.encode(w);
+                }
+            }
+        }
+        fn decode(r: &mut Reader<'_>) -> Self {
+            match r.variant() {
+                1 => ModeThreshold::Kt(Codec::decode(r)),
+                2 => ModeThreshold::At(Codec::decode(r)),
+                v => {
+                    if v != 0 {
+                        r.bad_variant("ModeThreshold", v);
+                    }
+                    ModeThreshold::Rt(Codec::decode(r))
+                }
+            }
+        }
+    }
+}

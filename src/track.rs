@@ -231,3 +231,13 @@ mod tests {
         assert!((tr.base[0] - 20.0).abs() < 0.1, "{:?}", tr.base);
     }
 }
+
+/// The snapshot codec of this file's state types ([`crate::codec`]): each
+/// struct's fields in declaration order (a field left out does not compile;
+/// `skip`: not saved, rebuilt on restore).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt });
+}

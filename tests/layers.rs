@@ -11,10 +11,12 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-/// Modules the core builds on; none may reach a lab module.
-const CORE: [&str; 16] = [
-    "anfis", "audit", "config", "detector", "filter", "frames", "indicators", "logs", "methods", "metrics", "model", "rng",
-    "sample", "snapshot", "thresholds", "track",
+/// Modules the core builds on; none may reach a lab module. (The log
+/// readers and the row type are the crate `navguard-logs`, which cannot
+/// import navguard at all: cargo refuses the cycle.)
+const CORE: [&str; 15] = [
+    "anfis", "audit", "codec", "config", "detector", "filter", "frames", "indicators", "methods", "metrics", "model", "rng",
+    "snapshot", "thresholds", "track",
 ];
 /// Lab modules: simulators, the method comparison, training, tightly coupled.
 const LAB: [&str; 5] = ["battery", "calibrate", "compare", "sim", "tight"];

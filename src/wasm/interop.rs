@@ -440,12 +440,3 @@ pub fn to_js<T: Serialize + ?Sized>(x: &T) -> Result<JsValue, JsError> {
 pub fn set(o: &Object, k: &str, v: &JsValue) {
     let _ = Reflect::set(o, &JsValue::from_str(k), v);
 }
-
-/// A log no reader can read, as a JS `Error` with its one-line message
-/// (facade functions that return `JsError` take it with `?` through
-/// wasm-bindgen's `From<E: Error>`; this is the same for `JsValue`).
-impl From<crate::error::LogError> for JsValue {
-    fn from(e: crate::error::LogError) -> JsValue {
-        JsError::from(e).into()
-    }
-}

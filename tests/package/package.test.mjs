@@ -24,11 +24,12 @@ const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
 const CORE_WASM = statSync(join(pkg, 'navguard_core_bg.wasm')).size;
 const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // Issue 15 asks for <= 300 KB. With the threshold pools and the model
-// embedded in postcard (no simulator, no JSON parser in the core) it is
-// 557 KB: the row path at opt-level 3, the log readers, snapshots, audits
-// and the config checker make up the rest (README, Speed and size). Lower
-// this as the core shrinks.
-const CORE_WASM_BUDGET = 565_000;
+// embedded (no simulator, no JSON parser in the core), snapshots and the
+// config read by hand-written code (no serde deserializer), and the log
+// readers built for size, it is 466 KB: the row path at opt-level 3, the
+// readers, audits and the facade make up the rest (README, Speed and
+// size). Lower this as the core shrinks (about 1% over the measured size).
+const CORE_WASM_BUDGET = 470_500;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;

@@ -8,11 +8,23 @@
 //! [`Reorder`] buffer instead of a whole-file sort; the whole-bytes readers
 //! ([`read_any`]) run the same code with a `Vec` as the sink.
 
+//!
+//! This is its own crate (`navguard-logs`, re-exported by navguard as
+//! `navguard::logs`, with [`sample`] as `navguard::sample`) so that the
+//! core wasm module can build it for size (`opt-level = "z"` in the
+//! `wasm-core` profile): cargo sets the opt-level per crate, and the
+//! readers are cold next to the detector's row path. It holds the row type
+//! ([`Sample`]) and the readers' error ([`LogError`]) because the readers
+//! make both; it depends on nothing of navguard's.
+
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
 pub use crate::error::{LogError, LogPos};
 use crate::sample::Sample;
+
+pub mod error;
+pub mod sample;
 
 pub mod csv;
 pub mod dataflash;

@@ -4,6 +4,10 @@
 //! convention as the columnar JS API, so a row costs no allocation.
 
 /// A navlog row. Units follow the contract: s, deg, m, m/s, m/s², rad/s.
+///
+/// Its methods are `#[inline]`: the detector's row path calls them, and
+/// this crate is built for size in the core wasm module (inline functions
+/// are compiled in the calling crate, at its opt-level).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
     /// Time, s (required, non-decreasing).
@@ -65,6 +69,7 @@ pub struct Sample {
 }
 
 impl Default for Sample {
+    #[inline]
     fn default() -> Self {
         Self::at(f64::NAN)
     }
@@ -80,6 +85,7 @@ pub const COLUMNS: [&str; 27] = [
 
 impl Sample {
     /// An empty row at time `t` (s).
+    #[inline]
     pub const fn at(t: f64) -> Self {
         let n = f64::NAN;
         Sample {
@@ -90,6 +96,7 @@ impl Sample {
     }
 
     /// Field by column index (see [`COLUMNS`]).
+    #[inline]
     pub fn get(&self, i: usize) -> f64 {
         match i {
             0 => self.t, 1 => self.lat, 2 => self.lon, 3 => self.alt, 4 => self.pn,
@@ -138,6 +145,7 @@ impl Sample {
     }
 
     /// Set a field by column index (see [`COLUMNS`]); out-of-range is ignored.
+    #[inline]
     pub fn set(&mut self, i: usize, v: f64) {
         let slot = match i {
             0 => &mut self.t, 1 => &mut self.lat, 2 => &mut self.lon, 3 => &mut self.alt,
@@ -153,11 +161,13 @@ impl Sample {
     }
 
     /// Column index of a contract column name.
+    #[inline]
     pub fn column_index(name: &str) -> Option<usize> {
         COLUMNS.iter().position(|c| *c == name)
     }
 
     /// Does the row carry a position (lat/lon/alt or pn/pe/pd, all three)?
+    #[inline]
     pub fn has_position(&self) -> bool {
         (self.lat.is_finite() && self.lon.is_finite() && self.alt.is_finite())
             || (self.pn.is_finite() && self.pe.is_finite() && self.pd.is_finite())
@@ -165,32 +175,38 @@ impl Sample {
 
     /// Contract §1: a row "has a GPS fix" when a full position is present and
     /// `fix` is absent or >= 2.
+    #[inline]
     pub fn has_fix(&self) -> bool {
         self.has_position() && (self.fix.is_nan() || self.fix >= 2.0)
     }
 
     /// A receiver report of "no fix" at this instant (an outage sample):
     /// `fix` < 2 present, or a position present with `fix` < 2.
+    #[inline]
     pub fn reports_no_fix(&self) -> bool {
         self.fix.is_finite() && self.fix < 2.0
     }
 
     /// GPS velocity present (all three axes).
+    #[inline]
     pub fn has_velocity(&self) -> bool {
         self.vn.is_finite() && self.ve.is_finite() && self.vd.is_finite()
     }
 
     /// Accelerometer present (all three axes).
+    #[inline]
     pub fn has_accel(&self) -> bool {
         self.ax.is_finite() && self.ay.is_finite() && self.az.is_finite()
     }
 
     /// Attitude quaternion present (all four components).
+    #[inline]
     pub fn has_attitude(&self) -> bool {
         self.qw.is_finite() && self.qx.is_finite() && self.qy.is_finite() && self.qz.is_finite()
     }
 
     /// Barometric altitude present.
+    #[inline]
     pub fn has_baro(&self) -> bool {
         self.baro.is_finite()
     }

@@ -1498,7 +1498,7 @@ mod tests {
     /// Path of a PX4 test log; `../shared` is a sibling of the crate root.
     macro_rules! px4 {
         ($f:literal) => {
-            concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/px4/", $f)
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/px4/", $f)
         };
     }
 
@@ -1515,7 +1515,7 @@ mod tests {
     /// simulation whose boot clock is Unix time: its UTC offset is 0.
     #[test]
     fn modes_messages_and_utc() {
-        use crate::logs::extras::{iso_utc, EphSource};
+        use crate::extras::{iso_utc, EphSource};
         let d = parse(px4!("sample_px4_events.ulg"));
         let x = &d.extras;
         assert_eq!(x.eph_source, EphSource::Eph);

@@ -63,8 +63,8 @@
 
 use std::collections::BTreeMap;
 
-use crate::logs::extras::{gps_to_unix, EphSource, Extras};
-use crate::logs::{LogData, LogError, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
+use crate::extras::{gps_to_unix, EphSource, Extras};
+use crate::{LogData, LogError, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::sample::Sample;
 
 const HEAD1: u8 = 0xA3;
@@ -1342,11 +1342,11 @@ mod tests {
 
     const LOITER: &[u8] = include_bytes!(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/ardupilot/Loiter_RTL.bin"
+        "/../../shared/data/ardupilot/Loiter_RTL.bin"
     ));
     const PLANE: &[u8] = include_bytes!(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/ardupilot/truncated_plane.BIN"
+        "/../../shared/data/ardupilot/truncated_plane.BIN"
     ));
 
     fn close(a: f64, b: f64, eps: f64) -> bool {
@@ -1389,7 +1389,7 @@ mod tests {
     /// seconds; the MODE numbers as copter modes; MSG, ERR and EV listed.
     #[test]
     fn loiter_extras() {
-        use crate::logs::extras::{iso_utc, EphSource};
+        use crate::extras::{iso_utc, EphSource};
         let d = loiter();
         let x = &d.extras;
         assert_eq!(x.eph_source, EphSource::Hdop);
@@ -1414,8 +1414,8 @@ mod tests {
     /// plane log has GPA, so its eph is metres.
     #[test]
     fn plane_modes_and_gpa_eph() {
-        use crate::logs::extras::EphSource;
-        let b = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/ardupilot/erle_plane_4-12-2014_329.BIN")).unwrap();
+        use crate::extras::EphSource;
+        let b = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/ardupilot/erle_plane_4-12-2014_329.BIN")).unwrap();
         let d = read_dataflash(&b).unwrap();
         let names: Vec<&str> = d.extras.modes.iter().map(|m| m.mode.as_str()).collect();
         assert_eq!(names, ["MANUAL", "CIRCLE", "MANUAL", "FBWA", "RTL", "MANUAL", "FBWA", "FBWB", "FBWA"]);
