@@ -1279,6 +1279,13 @@ mod tests {
     fn pv_window_sum_with_clipping_hand_computed() {
         // Window 4, σ_S = 1 (initial), σ_u = 0.3 (initial) so the clip is 0.9.
         let mut p = PvTest::new(4);
+        for _ in 0..4 {
+            p.push([0.5, 0.0, 0.0]);
+        }
+        assert!(p.stat.is_nan(), "no statistic before σ_S has been learnt from PV_MIN_WINDOWS windows");
+        // As if learnt, σ_S still at its initial 1 (the count only gates).
+        p.learnt_s = PV_MIN_WINDOWS;
+        p.clear();
         for _ in 0..3 {
             p.push([0.5, 0.0, 0.0]);
             assert!(p.stat.is_nan(), "no statistic before the window is full");
