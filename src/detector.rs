@@ -707,6 +707,12 @@ struct Consistency {
     rate: ClockRate,
     /// The GPS position against its own velocity integrated.
     track: VelocityTrack,
+    /// The baro altitude against the GPS altitude, and against the GPS
+    /// vertical velocity integrated: levels with baselines learnt in
+    /// flight. A baro that drifts leaves both; a GPS vertical fault only
+    /// the first.
+    baro_gps_level: VelocityTrack,
+    baro_dop_level: VelocityTrack,
 }
 
 /// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
@@ -981,6 +987,8 @@ impl Consistency {
             last_baro: None,
             rate: ClockRate::new(),
             track: VelocityTrack::default(),
+            baro_gps_level: VelocityTrack::default(),
+            baro_dop_level: VelocityTrack::default(),
         }
     }
 
@@ -1027,6 +1035,16 @@ impl Consistency {
                 } else {
                     self.track.step(dtg, y.into(), (*v).into(), pv.into());
                 }
+                match self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
+                    Some((_, b)) if !vel_withheld => {
+                        self.baro_gps_level.step(dtg, [b + y[2], 0.0, 0.0], [0.0; 3], [0.0; 3]);
+                        self.baro_dop_level.step(dtg, [b, 0.0, 0.0], [-v[2], 0.0, 0.0], [-pv[2], 0.0, 0.0]);
+                    }
+                    _ => {
+                        self.baro_gps_level.clear();
+                        self.baro_dop_level.clear();
+                    }
+                }
             }
             // A dropped record or two: the track integrates across the gap.
             (Some(v), Some((pt, _, pv))) if !vel_withheld && t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S => {
@@ -1036,6 +1054,8 @@ impl Consistency {
             _ => {
                 ind.clear_pv();
                 self.track.clear();
+                self.baro_gps_level.clear();
+                self.baro_dop_level.clear();
             }
         }
         self.last_gps = fix.vel.map(|v| (t, y, v));
@@ -1055,7 +1075,14 @@ impl Consistency {
             None => ind.clear_imu(),
         }
         ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
-        ind.close_epoch()
+        let mut out = ind.close_epoch();
+        // The baro's level: condemned only when it left both references.
+        let dep = self.baro_gps_level.departure().min(self.baro_dop_level.departure()) * GATE;
+        if dep.is_finite() && out.r_group[2].is_finite() && dep > out.r_group[2] {
+            out.r_group[2] = dep;
+            out.r = out.r.max(dep);
+        }
+        out
     }
 }
 
@@ -1976,6 +2003,8 @@ impl Detector {
         step.reset |= restart;
         if !step.fault && !step.reset {
             self.consistency.track.learn();
+            self.consistency.baro_gps_level.learn();
+            self.consistency.baro_dop_level.learn();
         }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
@@ -2624,7 +2653,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

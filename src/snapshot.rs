@@ -53,8 +53,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// detector learns the receiver's usual accuracy claim. 6: the boot-clock
 /// rate's fit against the receiver's own time (`gps_time`). 7: a
 /// position episode keeps the offset it re-anchored onto when it coasted
-/// out.
-pub const VERSION: u32 = 7;
+/// out. 8: the baro's level against the GPS altitude and the integrated
+/// GPS vertical velocity.
+pub const VERSION: u32 = 8;
 
 #[derive(Clone)]
 struct Header {

@@ -134,6 +134,16 @@ impl VelocityTrack {
         Some(core::array::from_fn(|a| d[a] - p[a]))
     }
 
+    /// How far `d` sits from its learnt baseline: its σ-normalised distance
+    /// (the axes combined) over `FAR`, so 1 at `FAR` σ. NaN until the
+    /// baseline has lived `MIN_AGE_S`.
+    pub fn departure(&self) -> f64 {
+        match self.d {
+            Some(d) if self.age >= MIN_AGE_S => self.z(&d) / FAR,
+            _ => f64::NAN,
+        }
+    }
+
     /// The fix sits on its own velocity track: within `NEAR` σ of the
     /// learnt baseline, once the baseline has lived `MIN_AGE_S`.
     pub fn on_track(&self) -> bool {

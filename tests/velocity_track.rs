@@ -100,3 +100,18 @@ fn after_a_stuck_baro_the_gps_is_not_blamed_for_the_filters_height() {
     let n = flagged_after(&f, 60.0);
     assert!(n <= 100, "{n} epochs flagged in the 60 s after the stuck baro");
 }
+
+/// The baro's level against the GPS altitude and against the GPS vertical
+/// velocity integrated (baselines learnt in flight, `VelocityTrack`):
+/// condemned once it has left both by 5 σ. A slow baro drift, which the
+/// baro's 6 s change windows never see, is then flagged. Regression: tune
+/// #59 (fixed-wing, 10 Hz, a 0.33 m/s baro drift for 106 s) was flagged for
+/// 0% of it.
+#[test]
+fn a_slow_baro_drift_leaves_both_gps_references_and_is_flagged() {
+    let f = Flight::draw(Split::Tune, 59);
+    assert_eq!(f.faults[0].kind.name(), "baro-drift");
+    let r = battery::run(&f, &Config::default()).unwrap();
+    let share = r.events[0].share;
+    assert!(share >= 0.5, "{:.0}% of the drift flagged", 100.0 * share);
+}
