@@ -6,7 +6,7 @@
 
 use arbitrary::{Arbitrary, Unstructured};
 use libfuzzer_sys::fuzz_target;
-use navguard::detector::Model;
+use navguard::detector::{kind, Model};
 use navguard::sample::COLUMNS;
 use navguard::{ConfigInput, Detector, Sample};
 
@@ -196,9 +196,9 @@ fuzz_target!(|data: &[u8]| {
             let before = det.stats();
             match det.push(&s) {
                 Ok(o) => {
-                    assert!(o.status <= 1 && o.kind <= 3, "{o:?}");
+                    assert!(o.status <= 1 && o.kind <= kind::STALE, "{o:?}");
                     assert!(o.t == s.t, "output time {} for row time {}", o.t, s.t);
-                    assert!(!o.f.is_nan() || o.kind == 3, "F is NaN on a verdict row: {o:?} for {s:?}");
+                    assert!(!o.f.is_nan() || o.kind == kind::NO_GPS, "F is NaN on a verdict row: {o:?} for {s:?}");
                 }
                 Err(e) => {
                     assert!(COLUMNS.contains(&e.field), "{e}");
