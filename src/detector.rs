@@ -553,12 +553,12 @@ impl Residuals {
         }
         let norm = p2.sqrt();
         let u: [f64; 3] = core::array::from_fn(|a| p[a] / norm);
-        let along = |x: &dyn Fn(usize) -> f64| (0..3).map(|a| x(a) * u[a]).sum::<f64>();
+        let along = |x: [f64; 3]| (0..3).map(|a| x[a] * u[a]).sum::<f64>();
         // NaN when an axis has no previous residual: then nothing is new.
-        let new_p = along(&|a| p[a] - self.prev_r[a]);
-        let moved = along(&|a| gps_jump[a]);
+        let new_p = along(core::array::from_fn(|a| p[a] - self.prev_r[a]));
+        let moved = along(gps_jump);
         let dv: [f64; 3] = core::array::from_fn(|a| vin.nu[a] - self.prev_r[3 + a]);
-        let jump_v = along(&|a| dv[a]);
+        let jump_v = along(dv);
         let sigma = (0..3).map(|a| (u[a] * sigma_dv[a]).powi(2)).sum::<f64>().sqrt();
         let across = (0..3).map(|a| (dv[a] - jump_v * u[a]).powi(2)).sum::<f64>().sqrt();
         let age = norm / jump_v;
@@ -567,85 +567,6 @@ impl Residuals {
             && jump_v > DRAG_RETURN_Z * sigma
             && across <= DRAG_RETURN_ACROSS * jump_v
             && (DRAG_RETURN_MIN_AGE_S..=flown).contains(&age)
-    }
-}
-
-#[cfg(test)]
-mod drag_return_tests {
-    use super::*;
-
-    /// Residuals of a fix whose position residual is `p` (previous `p0`)
-    /// and velocity residual `v` (previous zero).
-    fn res(p: [f64; 3], p0: [f64; 3], v: [f64; 3]) -> Residuals {
-        let mut prev_r = [0.0; 6];
-        prev_r[..3].copy_from_slice(&p0);
-        Residuals {
-            pin: Innovation { nu: p, s: [1.0; 3] },
-            vin: Some(Innovation { nu: v, s: [0.04; 3] }),
-            prev_r,
-            r_ref: [0.0; 3],
-        }
-    }
-
-    const SIGMA_DV: [f64; 3] = [0.1; 3];
-
-    #[test]
-    fn a_position_and_velocity_jump_back_together_is_a_return() {
-        // 30 m back along north with 0.5 m/s (5 σ): a 60 s drag undone.
-        let r = res([-30.0, 0.0, 0.0], [0.2, 0.0, 0.0], [-0.5, 0.05, 0.0]);
-        assert!(r.drag_returned(100.0, Some([-30.1, 0.0, 0.0]), SIGMA_DV));
-        // The same in the vertical.
-        let r = res([0.0, 0.0, 20.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.4]);
-        assert!(r.drag_returned(100.0, Some([0.0, 0.0, 20.0]), SIGMA_DV));
-    }
-
-    #[test]
-    fn a_step_onset_or_a_pulled_filter_is_not() {
-        let track = Some([-30.0, 0.0, 0.0]);
-        // Step onset: the velocity did not jump (2 σ of noise).
-        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.2, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
-        // The velocity jumped across the position jump, not along it.
-        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.6, 0.0]).drag_returned(100.0, track, SIGMA_DV));
-        // Against it: the position ran back while the velocity ran on.
-        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
-        // The residual grew over earlier epochs (a drifting filter).
-        assert!(!res([-30.0, 0.0, 0.0], [-25.0, 0.0, 0.0], [-0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
-        // The GPS stayed on its own track: the filter moved (a baro pull).
-        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, Some([-0.3, 0.0, 0.0]), SIGMA_DV));
-        // No track yet, or no velocity.
-        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, None, SIGMA_DV));
-        let mut r = res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]);
-        r.vin = None;
-        assert!(!r.drag_returned(100.0, track, SIGMA_DV));
-        // NaN previous residuals (references just reset): nothing is new.
-        assert!(!res([-30.0, 0.0, 0.0], [f64::NAN; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
-    }
-
-    #[test]
-    fn a_jump_undoes_an_offset_only_by_most_of_it_along_it() {
-        let off = [10.0, 5.0, 0.0];
-        assert!(undoes(&[-10.0, -5.0, 0.0], &off, 0.0));
-        // Plus the drift since the re-anchoring (ramp): 1.3 of it.
-        assert!(undoes(&[-13.0, -6.5, 1.0], &off, 0.0));
-        assert!(!undoes(&[-4.0, -2.0, 0.0], &off, 0.0), "0.4 of it");
-        assert!(!undoes(&[-16.0, -8.0, 0.0], &off, 0.0), "1.6 of it");
-        assert!(!undoes(&[10.0, 5.0, 0.0], &off, 0.0), "away from it");
-        assert!(!undoes(&[5.0, -10.0, 0.0], &off, 0.0), "across it");
-        // Shorter than the noise floor, or nothing to undo.
-        assert!(!undoes(&[-10.0, -5.0, 0.0], &off, 200.0));
-        assert!(!undoes(&[-10.0, -5.0, 0.0], &[0.0; 3], 0.0));
-        assert!(!undoes(&[f64::NAN; 3], &off, 0.0));
-    }
-
-    #[test]
-    fn the_implied_drag_age_must_fit_the_flight() {
-        let track = Some([-30.0, 0.0, 0.0]);
-        // 30 m at 0.5 m/s is a 60 s drag: not after 40 s of flight.
-        assert!(!res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(40.0, track, SIGMA_DV));
-        assert!(res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(61.0, track, SIGMA_DV));
-        // 3 m at 1 m/s is 3 s: shorter than any drag worth re-anchoring on
-        // (a baro step pulls the filter's height and velocity like this).
-        assert!(!res([-3.0, 0.0, 0.0], [0.0; 3], [-1.0, 0.0, 0.0]).drag_returned(100.0, Some([-3.0, 0.0, 0.0]), SIGMA_DV));
     }
 }
 
@@ -992,6 +913,29 @@ impl Consistency {
         }
     }
 
+    /// At a fault verdict outside any episode: is this jump the end of a
+    /// position fault that was never flagged, or no longer, rather than the
+    /// start of a new one? Then the caller re-anchors on the fix and opens
+    /// nothing. Three ends: the GPS back onto its own velocity track (a slow
+    /// ramp the filter followed); back by the offset a coasted-out episode
+    /// re-anchored onto (`Episode::undone`); or, for a fix the receiver
+    /// calls `usual`, off its track with its velocity jumping along by more
+    /// than `sigma_dv` allows (a drag-off the filter followed, see
+    /// `Residuals::drag_returned`), which moves the track's baseline with it.
+    fn unflagged_fault_ended(&mut self, episode: &mut Episode, res: &Residuals, usual: bool, sigma_dv: [f64; 3]) -> bool {
+        // Asked first: a remembered offset is forgotten once undone, even
+        // when the track also says the fault ended.
+        let undone = episode.undone(res);
+        if undone || self.track.returned() {
+            return true;
+        }
+        let dragged = usual && res.drag_returned(self.flight_time, self.track.jump(), sigma_dv);
+        if dragged {
+            self.track.rebase();
+        }
+        dragged
+    }
+
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
     /// `v1` (m/s), `on_imu` or on the constant-velocity model.
     fn advance(&mut self, dt: f64, v0: Vector3<f64>, v1: Vector3<f64>, flying: bool, on_imu: bool) {
@@ -1076,8 +1020,10 @@ impl Consistency {
         }
         ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
-        // The baro's level: condemned only when it left both references.
-        let dep = self.baro_gps_level.departure().min(self.baro_dop_level.departure()) * GATE;
+        // The baro's level: condemned only when it left both references
+        // (NaN, not judged, unless both are).
+        let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
+        let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
         if dep.is_finite() && out.r_group[2].is_finite() && dep > out.r_group[2] {
             out.r_group[2] = dep;
             out.r = out.r.max(dep);
@@ -1490,9 +1436,13 @@ impl Episode {
 
     /// Outside any episode: the GPS jumped back by most of the offset a
     /// coasted-out position episode re-anchored onto: the fault it stopped
-    /// judging ended.
-    fn undone(&self, res: &Residuals) -> bool {
-        self.accepted.is_some_and(|off| undoes(&res.pin.nu, &off, 0.0))
+    /// judging ended. Forgets the offset once undone.
+    fn undone(&mut self, res: &Residuals) -> bool {
+        let back = self.accepted.is_some_and(|off| undoes(&res.pin.nu, &off, 0.0));
+        if back {
+            self.accepted = None;
+        }
+        back
     }
 
     /// Whether the episode, `elapsed` s old, is over and the filter should
@@ -1962,30 +1912,16 @@ impl Detector {
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
-        // Outside any episode, a jump that brings the GPS back onto its own
-        // velocity track ends a position fault the filter had followed (a
-        // slow ramp): re-anchor on the fix, open nothing.
-        let judge_return = verdict.fault && !self.oracle && !self.episode.active;
-        let undone = judge_return && self.episode.undone(&res);
-        if undone {
-            self.episode.accepted = None;
-        }
-        let track_return = judge_return && (self.consistency.track.returned() || undone);
-        // Or the end of a drag-off the filter followed: the GPS left its
-        // track with its velocity jumping along (see `drag_returned`).
-        let drag_return = judge_return
-            && !track_return
-            && self.quality.scale(fix.eph) < QUALITY_DEGRADED
-            && res.drag_returned(
-                self.consistency.flight_time,
-                self.consistency.track.jump(),
+        let fault_ended = verdict.fault
+            && !self.oracle
+            && !self.episode.active
+            && self.consistency.unflagged_fault_ended(
+                &mut self.episode,
+                &res,
+                self.quality.scale(fix.eph) < QUALITY_DEGRADED,
                 core::array::from_fn(|a| self.ind.sigma(3 + a)),
             );
-        if drag_return {
-            self.consistency.track.rebase();
-        }
-        let track_return = track_return || drag_return;
-        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || track_return);
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
         // the fault (or the test would see the learnt error after it ends).
@@ -2227,6 +2163,80 @@ fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// Residuals of a fix whose position residual is `p` (previous `p0`)
+    /// and velocity residual `v` (previous zero).
+    fn drag_res(p: [f64; 3], p0: [f64; 3], v: [f64; 3]) -> Residuals {
+        let mut prev_r = [0.0; 6];
+        prev_r[..3].copy_from_slice(&p0);
+        Residuals {
+            pin: Innovation { nu: p, s: [1.0; 3] },
+            vin: Some(Innovation { nu: v, s: [0.04; 3] }),
+            prev_r,
+            r_ref: [0.0; 3],
+        }
+    }
+
+    const SIGMA_DV: [f64; 3] = [0.1; 3];
+
+    #[test]
+    fn a_position_and_velocity_jump_back_together_is_a_return() {
+        // 30 m back along north with 0.5 m/s (5 σ): a 60 s drag undone.
+        let r = drag_res([-30.0, 0.0, 0.0], [0.2, 0.0, 0.0], [-0.5, 0.05, 0.0]);
+        assert!(r.drag_returned(100.0, Some([-30.1, 0.0, 0.0]), SIGMA_DV));
+        // The same in the vertical.
+        let r = drag_res([0.0, 0.0, 20.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.4]);
+        assert!(r.drag_returned(100.0, Some([0.0, 0.0, 20.0]), SIGMA_DV));
+    }
+
+    #[test]
+    fn a_step_onset_or_a_pulled_filter_is_not() {
+        let track = Some([-30.0, 0.0, 0.0]);
+        // Step onset: the velocity did not jump (2 σ of noise).
+        assert!(!drag_res([-30.0, 0.0, 0.0], [0.0; 3], [-0.2, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // The velocity jumped across the position jump, not along it.
+        assert!(!drag_res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.6, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // Against it: the position ran back while the velocity ran on.
+        assert!(!drag_res([-30.0, 0.0, 0.0], [0.0; 3], [0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // The residual grew over earlier epochs (a drifting filter).
+        assert!(!drag_res([-30.0, 0.0, 0.0], [-25.0, 0.0, 0.0], [-0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+        // The GPS stayed on its own track: the filter moved (a baro pull).
+        assert!(!drag_res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, Some([-0.3, 0.0, 0.0]), SIGMA_DV));
+        // No track yet, or no velocity.
+        assert!(!drag_res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, None, SIGMA_DV));
+        let mut r = drag_res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]);
+        r.vin = None;
+        assert!(!r.drag_returned(100.0, track, SIGMA_DV));
+        // NaN previous residuals (references just reset): nothing is new.
+        assert!(!drag_res([-30.0, 0.0, 0.0], [f64::NAN; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+    }
+
+    #[test]
+    fn a_jump_undoes_an_offset_only_by_most_of_it_along_it() {
+        let off = [10.0, 5.0, 0.0];
+        assert!(undoes(&[-10.0, -5.0, 0.0], &off, 0.0));
+        // Plus the drift since the re-anchoring (ramp): 1.3 of it.
+        assert!(undoes(&[-13.0, -6.5, 1.0], &off, 0.0));
+        assert!(!undoes(&[-4.0, -2.0, 0.0], &off, 0.0), "0.4 of it");
+        assert!(!undoes(&[-16.0, -8.0, 0.0], &off, 0.0), "1.6 of it");
+        assert!(!undoes(&[10.0, 5.0, 0.0], &off, 0.0), "away from it");
+        assert!(!undoes(&[5.0, -10.0, 0.0], &off, 0.0), "across it");
+        // Shorter than the noise floor, or nothing to undo.
+        assert!(!undoes(&[-10.0, -5.0, 0.0], &off, 200.0));
+        assert!(!undoes(&[-10.0, -5.0, 0.0], &[0.0; 3], 0.0));
+        assert!(!undoes(&[f64::NAN; 3], &off, 0.0));
+    }
+
+    #[test]
+    fn the_implied_drag_age_must_fit_the_flight() {
+        let track = Some([-30.0, 0.0, 0.0]);
+        // 30 m at 0.5 m/s is a 60 s drag: not after 40 s of flight.
+        assert!(!drag_res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(40.0, track, SIGMA_DV));
+        assert!(drag_res([-30.0, 0.0, 0.0], [0.0; 3], [-0.5, 0.0, 0.0]).drag_returned(61.0, track, SIGMA_DV));
+        // 3 m at 1 m/s is 3 s: shorter than any drag worth re-anchoring on
+        // (a baro step pulls the filter's height and velocity like this).
+        assert!(!drag_res([-3.0, 0.0, 0.0], [0.0; 3], [-1.0, 0.0, 0.0]).drag_returned(100.0, Some([-3.0, 0.0, 0.0]), SIGMA_DV));
+    }
 
     #[test]
     fn receiver_quality_scales_by_the_ratio_and_does_not_learn_a_degraded_fix() {

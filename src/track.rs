@@ -13,6 +13,10 @@
 //! asks it: did this epoch's jump bring `d` back inside its wander from far
 //! outside it? That is the end of a position fault that was never flagged
 //! (a slow ramp the filter followed), not the start of a new one.
+//!
+//! The detector also uses it on one axis (the others fed zeros, which stay
+//! at zero departure) for the baro's level: against the GPS altitude (no
+//! velocity to integrate) and against the GPS vertical velocity integrated.
 use serde::{Deserialize, Serialize};
 
 /// Time constant of the baseline and of σ, s.
