@@ -25,7 +25,9 @@ pub struct FaultInterval {
     /// Boot-clock seconds of the last flagged row.
     pub end: f64,
     /// "gps_outage" (no fix), "gps_stale" (the receiver repeated its last
-    /// fix bit for bit: frozen output) or "residual".
+    /// fix bit for bit: frozen output), "gps_degraded" (the receiver
+    /// declared its fix degraded: 2D, ≤ 4 satellites, or an accuracy claim
+    /// 3× its usual) or "residual".
     pub kind: &'static str,
     /// Largest F-indicator inside.
     pub peak_f: f64,
@@ -743,6 +745,7 @@ fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Ou
     let kind_name = match o.kind {
         kind::OUTAGE => "gps_outage",
         kind::STALE => "gps_stale",
+        kind::DEGRADED => "gps_degraded",
         _ => "residual",
     };
     let ind = det.indicators();

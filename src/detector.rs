@@ -72,6 +72,10 @@ pub mod kind {
     /// outage takes repeated the last new one bit for bit (see
     /// `Clock::fresh`).
     pub const STALE: u8 = 4;
+    /// GPS degraded by the receiver's own word: a 2D fix, four satellites
+    /// or fewer, or an accuracy claim `QUALITY_DECLARED` times its usual
+    /// (see `ReceiverQuality::declares_degraded`).
+    pub const DEGRADED: u8 = 5;
 }
 
 /// Per-row output.
@@ -291,11 +295,30 @@ struct Fix {
     eph: f64,
     /// The receiver's own time of the fix, s (NaN when the log has none).
     gps_time: f64,
+    /// Satellites in use and fix type (2 = 2D, 3 = 3D), NaN when absent.
+    sats: f64,
+    fix_type: f64,
 }
 
 impl Fix {
     fn new(s: &Sample, anchor: &Anchor) -> Self {
-        Fix { t: s.t, y: anchor.to_ned(s), vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)), eph: s.eph, gps_time: s.gps_time }
+        Fix {
+            t: s.t,
+            y: anchor.to_ned(s),
+            vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)),
+            eph: s.eph,
+            gps_time: s.gps_time,
+            sats: s.sats,
+            fix_type: s.fix,
+        }
+    }
+
+    /// The receiver calls this fix degraded in its own fields: a 2D fix
+    /// (no autopilot EKF fuses one), or four satellites or fewer (a 3D fix
+    /// with no redundant satellite: no integrity check is possible, and
+    /// ArduPilot and PX4 require six to arm).
+    fn self_declared_degraded(&self) -> bool {
+        self.fix_type == 2.0 || (self.sats.is_finite() && self.sats <= MAX_DEGRADED_SATS)
     }
 }
 
@@ -315,6 +338,12 @@ struct ReceiverQuality {
     learnt: u32,
     /// Consecutive fixes the receiver called degraded, up to the last.
     degraded_run: u32,
+    /// The receiver declared its last fix degraded (`declares_degraded`).
+    declared: bool,
+    /// A fix the receiver did not call degraded has been seen: before it
+    /// the receiver is still acquiring (the PX4 logs' 2D fixes for 1.7 s
+    /// before the first 3D one), which is no fault of a fix it had.
+    acquired: bool,
 }
 
 /// Forgetting factor of the usual eph, per learnt fix.
@@ -325,6 +354,13 @@ const QUALITY_DEGRADED: f64 = 2.0;
 const QUALITY_MAX_SCALE: f64 = 100.0;
 /// Degraded fixes in a row before a good claim counts as re-acquisition.
 const QUALITY_RUN: u32 = 3;
+/// An accuracy claim this many times the usual one is the receiver
+/// declaring its fix degraded (flagged `DEGRADED`). Larger than
+/// `QUALITY_DEGRADED`: the shared real logs' HDOP reaches 2× its median
+/// on healthy stretches (26-11: 4 of 675 records), never 3×.
+const QUALITY_DECLARED: f64 = 3.0;
+/// Satellites at or below which a fix is degraded by its own count.
+const MAX_DEGRADED_SATS: f64 = 4.0;
 
 impl ReceiverQuality {
     /// How many times worse than usual the receiver calls a fix of `eph` m
@@ -346,6 +382,23 @@ impl ReceiverQuality {
         let back = !degraded && eph.is_finite() && self.degraded_run >= QUALITY_RUN;
         self.degraded_run = if degraded { self.degraded_run.saturating_add(1) } else { 0 };
         back
+    }
+
+    /// Whether the receiver declares the fix degraded in its own fields
+    /// (2D, ≤ `MAX_DEGRADED_SATS` satellites, or an accuracy claim
+    /// `QUALITY_DECLARED` times its learnt usual one), once it has given a
+    /// fix it did not call degraded. Fix by fix, as the receiver says it:
+    /// holding a declaration over the next usual fixes (1 s and 3 fixes was
+    /// tried) flagged the good fixes after a degraded stretch (paper
+    /// scenario false positives 14 → 164). The detector's tests still judge
+    /// the fix (down-weighted, see `scale`); this is the receiver's word,
+    /// reported as it is, like a no-fix report.
+    fn declares_degraded(&mut self, fix: &Fix) -> bool {
+        let learnt = f64::from(self.learnt) * QUALITY_ALPHA >= 1.0;
+        let says = fix.self_declared_degraded();
+        self.acquired |= !says;
+        self.declared = self.acquired && (says || (learnt && self.scale(fix.eph) >= QUALITY_DECLARED));
+        self.declared
     }
 
     /// Learn a claim from a fix with a normal verdict. Claims of a degraded
@@ -634,6 +687,9 @@ struct Consistency {
     /// the first.
     baro_gps_level: VelocityTrack,
     baro_dop_level: VelocityTrack,
+    /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
+    /// vertical velocity up m/s or NaN when it was not trusted).
+    baro_epoch: Option<(f64, f64, f64)>,
 }
 
 /// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
@@ -910,6 +966,7 @@ impl Consistency {
             track: VelocityTrack::default(),
             baro_gps_level: VelocityTrack::default(),
             baro_dop_level: VelocityTrack::default(),
+            baro_epoch: None,
         }
     }
 
@@ -934,6 +991,32 @@ impl Consistency {
             self.track.rebase();
         }
         dragged
+    }
+
+    /// The baro's levels at a GPS epoch at `t` (position `y` NED m, GPS
+    /// velocity `v` when it is trusted), with the latest baro sample. The
+    /// level against the GPS altitude needs no velocity. The level against
+    /// the vertical velocity integrates the GPS velocity while it is
+    /// trusted, and the filter's own (IMU-coasted) vertical velocity while
+    /// it is withheld, so a baro fault met during a GPS episode is still
+    /// judged against the level learnt before it: restarting the levels
+    /// there learnt the faulty baro as the new level, and its return was
+    /// flagged for up to 120 s (battery tune #131).
+    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>) {
+        let vup = v.map_or(f64::NAN, |v| -v[2]);
+        let prev = self.baro_epoch.replace((t, self.alt_int, vup));
+        let baro = self.last_baro.filter(|(tb, _)| t - tb < 0.5).map(|(_, b)| b);
+        let (Some(b), Some((pt, alt0, vup0))) = (baro, prev.filter(|(pt, ..)| t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S)) else {
+            self.baro_gps_level.clear();
+            self.baro_dop_level.clear();
+            return;
+        };
+        let dt = (t - pt) * self.rate.scale;
+        self.baro_gps_level.step(dt, [b + y[2], 0.0, 0.0], [0.0; 3], [0.0; 3]);
+        // Both ends on the GPS velocity, or the filter's climb over the
+        // interval (its integral, `alt_int`, advances in true time).
+        let (v1, v0) = if vup.is_finite() && vup0.is_finite() { (vup, vup0) } else { let c = (self.alt_int - alt0) / dt; (c, c) };
+        self.baro_dop_level.step(dt, [b, 0.0, 0.0], [v1, 0.0, 0.0], [v0, 0.0, 0.0]);
     }
 
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
@@ -979,16 +1062,6 @@ impl Consistency {
                 } else {
                     self.track.step(dtg, y.into(), (*v).into(), pv.into());
                 }
-                match self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
-                    Some((_, b)) if !vel_withheld => {
-                        self.baro_gps_level.step(dtg, [b + y[2], 0.0, 0.0], [0.0; 3], [0.0; 3]);
-                        self.baro_dop_level.step(dtg, [b, 0.0, 0.0], [-v[2], 0.0, 0.0], [-pv[2], 0.0, 0.0]);
-                    }
-                    _ => {
-                        self.baro_gps_level.clear();
-                        self.baro_dop_level.clear();
-                    }
-                }
             }
             // A dropped record or two: the track integrates across the gap.
             (Some(v), Some((pt, _, pv))) if !vel_withheld && t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S => {
@@ -998,11 +1071,10 @@ impl Consistency {
             _ => {
                 ind.clear_pv();
                 self.track.clear();
-                self.baro_gps_level.clear();
-                self.baro_dop_level.clear();
             }
         }
         self.last_gps = fix.vel.map(|v| (t, y, v));
+        self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld));
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
             ind.observe_baro_gps(t, b + y[2]);
@@ -1753,6 +1825,14 @@ impl Detector {
         };
         out.t = t;
         self.last = out;
+        // A fix the receiver itself declares degraded is reported as such,
+        // between fixes too, unless there is no fix to speak of. Only the
+        // output: the detector's own verdict (`self.last`) learns and
+        // feeds as before, with the fix down-weighted by its claim.
+        if self.quality.declared && !matches!(out.kind, kind::OUTAGE | kind::STALE | kind::NO_GPS) {
+            out.status = 1;
+            out.kind = kind::DEGRADED;
+        }
         out
     }
 
@@ -1963,6 +2043,8 @@ impl Detector {
         if !restart {
             self.learn(step.fault, &verdict, &ind);
         }
+        // The receiver's own word (reported by `push_valid`).
+        self.quality.declares_degraded(&fix);
         Output {
             t: fix.t,
             status: step.fault as u8,
@@ -2257,6 +2339,27 @@ mod tests {
         }
         assert!((q.scale(1.0) - 2.0).abs() < 1e-2, "{}", q.scale(1.0));
         assert_eq!(q.scale(1e9), 100.0);
+    }
+
+    /// The receiver's declaration, fix by fix: a 2D fix, ≤ 4 satellites,
+    /// or a claim 3× its usual one (once the usual one is learnt), and only
+    /// once the receiver has given a fix it did not call degraded.
+    #[test]
+    fn the_receiver_declares_a_degraded_fix_in_its_own_fields() {
+        let mut q = ReceiverQuality::default();
+        let fix = |eph: f64, sats: f64, fix_type: f64| Fix { t: 0.0, y: Vector3::zeros(), vel: None, eph, gps_time: f64::NAN, sats, fix_type };
+        // Still acquiring (2D, then 4 satellites): not declared.
+        assert!(!q.declares_degraded(&fix(5.0, 9.0, 2.0)) && !q.declares_degraded(&fix(5.0, 4.0, 3.0)));
+        for _ in 0..60 {
+            q.learn(1.0);
+            assert!(!q.declares_degraded(&fix(1.0, 9.0, 3.0)));
+        }
+        assert!(!q.declares_degraded(&fix(2.9, 9.0, 3.0)), "2.9x its usual claim is not a declaration");
+        assert!(q.declares_degraded(&fix(3.1, 9.0, 3.0)), "3.1x is");
+        assert!(q.declares_degraded(&fix(1.0, 4.0, 3.0)) && q.declares_degraded(&fix(1.0, 9.0, 2.0)));
+        assert!(!q.declares_degraded(&fix(1.0, 5.0, 3.0)), "5 satellites and a usual claim");
+        // No sats or fix type in the log: only the claim can declare.
+        assert!(!q.declares_degraded(&fix(1.0, f64::NAN, f64::NAN)) && q.declares_degraded(&fix(4.0, f64::NAN, f64::NAN)));
     }
 
     /// A bad or edge value for column `i`: the bounds, just outside them,
@@ -2659,11 +2762,11 @@ mod codec_impls {
     impl_codec!(Stats { rows, gps_epochs, imu_rows, baro_rows, retrains, filter_resets, data_gaps, filter_errors });
     impl_codec!(Ring { buf, head, len });
     impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle });
-    impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run });
+    impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run, declared, acquired });
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

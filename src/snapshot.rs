@@ -54,8 +54,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// rate's fit against the receiver's own time (`gps_time`). 7: a
 /// position episode keeps the offset it re-anchored onto when it coasted
 /// out. 8: the baro's level against the GPS altitude and the integrated
-/// GPS vertical velocity.
-pub const VERSION: u32 = 8;
+/// GPS vertical velocity. 9: the receiver's own declaration of a degraded
+/// fix (`kind::DEGRADED`) and the run of usual fixes that lifts it.
+pub const VERSION: u32 = 9;
 
 #[derive(Clone)]
 struct Header {

@@ -48,3 +48,56 @@ fn the_good_fix_after_a_degraded_one_opens_no_interval() {
     // 10 Hz: at most 2 s flagged in the 58 s after the fault (was 598 epochs).
     assert!(after <= 20, "{after} epochs flagged after the degraded fix");
 }
+
+fn outputs(rows: &[Sample]) -> Vec<navguard::Output> {
+    let mut det = Detector::new(Config::default()).unwrap();
+    rows.iter().map(|s| det.push(s).unwrap()).collect()
+}
+
+/// A fix the receiver itself calls degraded (battery tune #72: 4–5
+/// satellites, eph 5–10 m against a usual 1 m, some 2D fixes) is flagged
+/// as `DEGRADED` for its whole length: before, the detector's own tests
+/// flagged only the jumps of its onset and a few more (55% of the
+/// battery's degraded epochs on the tune split).
+#[test]
+fn a_fix_the_receiver_declares_degraded_is_flagged_for_its_whole_length() {
+    use navguard::detector::kind;
+    let f = Flight::draw(Split::Tune, 72);
+    let ft = f.faults[0];
+    let rows = battery::simulate(&f);
+    let out = outputs(&rows);
+    let epochs = |lo: f64, hi: f64| rows.iter().zip(&out).filter(move |(s, _)| !s.label.is_nan() && s.t >= lo && s.t < hi);
+    let inside: Vec<_> = epochs(ft.start_log, ft.end_log).collect();
+    let declared = inside.iter().filter(|(_, o)| o.status == 1 && o.kind == kind::DEGRADED).count();
+    assert!(declared as f64 >= 0.95 * inside.len() as f64, "{declared} of {} epochs declared", inside.len());
+    // Fix by fix: the first usual fix after it is not declared.
+    let after = epochs(ft.end_log, ft.end_log + 20.0).filter(|(_, o)| o.kind == kind::DEGRADED).count();
+    assert_eq!(after, 0, "epochs still declared after the end");
+}
+
+/// The receiver's word changes only the output: the same clean flight with
+/// four satellites reported for 10 s is flagged `DEGRADED` there (and on
+/// the rows up to the next fix), and every other row's verdict, F and R
+/// are bit-identical to the flight as recorded.
+#[test]
+fn four_satellites_are_declared_degraded_and_change_nothing_else() {
+    use navguard::detector::kind;
+    let f = Flight::draw(Split::Tune, 1);
+    assert!(f.faults.is_empty());
+    let rows = battery::simulate(&f);
+    let t0 = rows.iter().find(|s| !s.label.is_nan()).unwrap().t + 60.0;
+    let few: Vec<Sample> = rows.iter().map(|s| if s.t >= t0 && s.t < t0 + 10.0 && s.sats.is_finite() { Sample { sats: 4.0, ..*s } } else { *s }).collect();
+    let (a, b) = (outputs(&rows), outputs(&few));
+    assert!(a.iter().all(|o| o.kind != kind::DEGRADED), "a clean flight declared degraded");
+    let gps_period = 1.0; // tune #1 logs its GPS at 1 Hz
+    for ((s, x), y) in rows.iter().zip(&a).zip(&b) {
+        assert_eq!((x.f.to_bits(), x.r.to_bits()), (y.f.to_bits(), y.r.to_bits()), "F or R changed at {}", s.t);
+        let window = s.t >= t0 && s.t < t0 + 10.0;
+        let tail = s.t >= t0 + 10.0 && s.t < t0 + 10.0 + gps_period + 1e-9;
+        if window && s.sats.is_finite() {
+            assert_eq!((y.status, y.kind), (1, kind::DEGRADED), "not declared at {}", s.t);
+        } else if !window && !tail {
+            assert_eq!((x.status, x.kind), (y.status, y.kind), "verdict changed at {}", s.t);
+        }
+    }
+}

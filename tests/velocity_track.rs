@@ -115,3 +115,21 @@ fn a_slow_baro_drift_leaves_both_gps_references_and_is_flagged() {
     let share = r.events[0].share;
     assert!(share >= 0.5, "{:.0}% of the drift flagged", 100.0 * share);
 }
+
+/// The baro's levels go on through a GPS episode: against the GPS altitude
+/// (no velocity needed) and against the filter's own vertical velocity
+/// while the GPS velocity is withheld. Regression: tune #131 (aggressive,
+/// 1 Hz GPS): a 12.4 m baro step for 119 s pulled the filter's height, the
+/// GPS velocity was withheld, the levels restarted on the stepped baro and
+/// learnt it as usual: 19% of the step was flagged, and its end was flagged
+/// for the rest of the flight (90 s).
+#[test]
+fn a_baro_step_met_in_a_gps_episode_is_judged_against_the_level_before_it() {
+    let f = Flight::draw(Split::Tune, 131);
+    assert_eq!(f.faults[0].kind.name(), "baro-step");
+    let r = battery::run(&f, &Config::default()).unwrap();
+    let share = r.events[0].share;
+    assert!(share >= 0.9, "{:.0}% of the step flagged", 100.0 * share);
+    let n = flagged_after(&f, 60.0);
+    assert!(n <= 10, "{n} epochs flagged in the 60 s after the step (1 Hz; was 60)");
+}

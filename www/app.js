@@ -32,7 +32,7 @@ const COLORS = {
 const KIND_FILL = { 1: 'rgba(220,38,38,0.13)', 2: 'rgba(217,119,6,0.16)', 3: 'rgba(156,163,175,0.18)' };
 const KIND_SOLID = { 0: '#dbeafe', 1: COLORS.fault, 2: COLORS.outage, 3: '#d1d5db' };
 const KIND_NAME = { 0: 'normal', 1: 'residual fault', 2: 'GPS outage', 3: 'no GPS yet' };
-const FAULT_KIND_LABEL = { residual: 'residual fault', gps_outage: 'GPS outage', gps_stale: 'GPS output frozen' };
+const FAULT_KIND_LABEL = { residual: 'residual fault', gps_outage: 'GPS outage', gps_stale: 'GPS output frozen', gps_degraded: 'GPS degraded (receiver-declared)' };
 const SYNC_KEY = 'navguard-time';
 const AXIS_L = 64; // fixed axis widths keep every time plot's x pixels aligned
 const AXIS_R = 56;
@@ -307,7 +307,7 @@ function renderSummary(m) {
     ['IMU rate', r.imuRateHz > 0 ? `${fmt(r.imuRateHz, 1)} Hz` : '— <span class="muted">(no IMU)</span>'],
     ['GPS availability', r.gpsAvailable ? `${pct(r.gpsFixFraction)} <span class="muted">of epochs with a fix</span>` : '<span class="bad">GPS unavailable</span>'],
     ['Flagged GPS epochs', pct(r.flaggedGpsEpochFraction)],
-    ['Fault intervals', `<span class="tag fault">${counts.residual} residual</span> <span class="tag outage">${counts.gps_outage} outage</span>${counts.gps_stale ? ` <span class="tag outage">${counts.gps_stale} frozen</span>` : ''} <span class="muted">${fmt(faultTime, 1)} s total</span>`],
+    ['Fault intervals', `<span class="tag fault">${counts.residual} residual</span> <span class="tag outage">${counts.gps_outage} outage</span>${counts.gps_stale ? ` <span class="tag outage">${counts.gps_stale} frozen</span>` : ''}${counts.gps_degraded ? ` <span class="tag outage">${counts.gps_degraded} degraded</span>` : ''} <span class="muted">${fmt(faultTime, 1)} s total</span>`],
     ['Data gaps', r.dataGaps.length ? r.dataGaps.map((g) => `${fmt(g.start - t0Of(m), 1)}–${fmt(g.end - t0Of(m), 1)} s`).join(', ') : 'none'],
     ['Missing inputs', r.missing.length ? `<span class="warn">${r.missing.map(esc).join(', ')}</span>` : 'none'],
     ['Method', esc(methodOf(m))],

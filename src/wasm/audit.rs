@@ -16,7 +16,7 @@ use crate::sample::COLUMNS;
 const TS_AUDIT: &'static str = r#"
 export interface Metrics { tp: number; fp: number; tn: number; fn: number; accuracy: number; falseAlarmRate: number; misdetectionRate: number; precision: number; recall: number; f2: number; meanDetectionDelay: number; faultIntervals: number; detectedIntervals: number }
 export interface FaultInterval {
-  start: number; end: number; kind: "gps_outage" | "gps_stale" | "residual"; peakF: number; driver: "gps_position" | "gps_velocity" | "baro" | "imu" | "none"; indicator: "R" | "C" | "none"; rows: number;
+  start: number; end: number; kind: "gps_outage" | "gps_stale" | "gps_degraded" | "residual"; peakF: number; driver: "gps_position" | "gps_velocity" | "baro" | "imu" | "none"; indicator: "R" | "C" | "none"; rows: number;
   /** Largest offset of the driving sensor from the filter's prediction, in `offsetUnit`; absent for an outage. */
   peakOffset?: number; offsetUnit: "m" | "m/s" | "";
   durationS: number; severity: "low" | "medium" | "high";

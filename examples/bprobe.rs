@@ -1,0 +1,18 @@
+//! Trace one battery flight: `bprobe tune|eval INDEX` prints each GPS epoch.
+use navguard::{battery, config::Config, detector::Detector};
+
+fn main() {
+    let a: Vec<String> = std::env::args().collect();
+    let split = battery::Split::parse(&a[1]).unwrap();
+    let f = battery::Flight::draw(split, a[2].parse().unwrap());
+    println!("# {}\n# {:?}", f.describe(), f.baro);
+    let rows = battery::simulate(&f);
+    let mut det = Detector::new(Config::default()).unwrap();
+    for s in &rows {
+        let o = det.push(s).unwrap();
+        if o.gps_epoch {
+            let i = det.indicators();
+            println!("{:8.2} lab {} st {} k {} drv {} f {:5.2} r {:6.2} rg {:6.2} {:6.2} {:6.2}", s.t, s.label, o.status, o.kind, o.driver, o.f, o.r, i.r_group[0], i.r_group[1], i.r_group[2]);
+        }
+    }
+}
