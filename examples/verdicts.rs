@@ -121,7 +121,9 @@ fn sim() -> Result<(), String> {
             cases.push((format!("preset {p} seed {seed}"), Scenario::preset(p, seed)?));
         }
         for c in battery(&[seed]) {
-            cases.push((format!("battery {} seed {seed}", c.label), c.scenario));
+            if let navguard::compare::CaseFlight::Scenario(sc) = c.flight {
+                cases.push((format!("battery {} seed {seed}", c.label), sc));
+            }
         }
     }
     let mut streams = vec![];

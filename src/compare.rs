@@ -10,10 +10,17 @@
 //! were caught and the median detection delay. On real logs (no labels): the
 //! share of GPS epochs flagged.
 //!
+//! The randomised development battery of issue 14 ([`crate::battery`]:
+//! other noise models, rates, IMU grades, trajectories, fault kinds and
+//! durations, boot clocks) is the other set of flights on offer
+//! ([`CompareRun::new_battery`]); its `eval` split was never used to tune
+//! anything.
+//!
 //! Runs incrementally ([`CompareRun::step`]) so a front end shows progress.
 
 use serde::Serialize;
 
+use crate::battery::{self, Split};
 use crate::config::Config;
 use crate::detector::Detector;
 use crate::logs::LogData;
@@ -30,7 +37,46 @@ pub struct Case {
     /// Readable label, e.g. "step 5 m".
     pub label: String,
     /// The simulated flight.
-    pub scenario: Scenario,
+    pub flight: CaseFlight,
+}
+
+/// Where a case's rows come from.
+#[derive(Clone, Debug)]
+pub enum CaseFlight {
+    /// The paper-style simulator (`sim`).
+    Scenario(Scenario),
+    /// A flight of the randomised development battery (`battery`).
+    Battery(Box<battery::Flight>),
+}
+
+impl CaseFlight {
+    fn simulate(&self) -> Result<Vec<Sample>, String> {
+        match self {
+            CaseFlight::Scenario(sc) => sim::simulate(sc),
+            CaseFlight::Battery(f) => Ok(battery::simulate(f)),
+        }
+    }
+
+    /// Length of the flight, s.
+    fn duration(&self) -> f64 {
+        match self {
+            CaseFlight::Scenario(sc) => sc.duration,
+            CaseFlight::Battery(f) => f.path.duration,
+        }
+    }
+}
+
+/// `n` flights of the randomised battery's `split` (indices 0..n), each
+/// reported under its first fault's kind (with its axis where it has one:
+/// `step-h`, `drag-off-v`) or "clean".
+pub fn battery_cases(split: Split, n: u64) -> Vec<Case> {
+    (0..n)
+        .map(|i| {
+            let f = battery::Flight::draw(split, i);
+            let group = f.faults.first().map_or_else(|| "clean".to_string(), battery::kind_key);
+            Case { group, label: f.describe(), flight: CaseFlight::Battery(Box::new(f)) }
+        })
+        .collect()
 }
 
 /// Fault magnitudes of the core issue: (kind, magnitudes, unit).
@@ -54,13 +100,13 @@ pub fn battery(seeds: &[u64]) -> Vec<Case> {
                 // Ramps need time to grow; the rest get 30 s.
                 let len = if kind == FaultKind::Ramp { 60.0 } else { 30.0 };
                 let label = if unit.is_empty() { kind.name().to_string() } else { format!("{} {m} {unit}", kind.name()) };
-                out.push(Case { group: kind.name().into(), label, scenario: Scenario::with_fault(kind, m, 120.0, len, seed) });
+                out.push(Case { group: kind.name().into(), label, flight: CaseFlight::Scenario(Scenario::with_fault(kind, m, 120.0, len, seed)) });
             }
         }
-        out.push(Case { group: "outage".into(), label: "paper (degraded fix)".into(), scenario: Scenario::paper(OutageMode::Degraded, seed) });
-        out.push(Case { group: "outage".into(), label: "paper (silent)".into(), scenario: Scenario::paper(OutageMode::Silent, seed) });
-        out.push(Case { group: "clean".into(), label: "clean aggressive".into(), scenario: Scenario::clean(Trajectory::Aggressive, seed, 300.0) });
-        out.push(Case { group: "clean".into(), label: "clean survey".into(), scenario: Scenario::clean(Trajectory::Survey, seed, 300.0) });
+        out.push(Case { group: "outage".into(), label: "paper (degraded fix)".into(), flight: CaseFlight::Scenario(Scenario::paper(OutageMode::Degraded, seed)) });
+        out.push(Case { group: "outage".into(), label: "paper (silent)".into(), flight: CaseFlight::Scenario(Scenario::paper(OutageMode::Silent, seed)) });
+        out.push(Case { group: "clean".into(), label: "clean aggressive".into(), flight: CaseFlight::Scenario(Scenario::clean(Trajectory::Aggressive, seed, 300.0)) });
+        out.push(Case { group: "clean".into(), label: "clean survey".into(), flight: CaseFlight::Scenario(Scenario::clean(Trajectory::Survey, seed, 300.0)) });
     }
     out
 }
@@ -119,8 +165,10 @@ pub struct MethodResult {
 #[derive(Clone, Debug, Serialize)]
 #[serde(rename_all = "camelCase")]
 pub struct Comparison {
-    /// Simulator seeds of the battery.
+    /// Simulator seeds of the battery (empty for the randomised battery).
     pub seeds: Vec<u64>,
+    /// The randomised battery's split ("tune" or "eval"), when it was run.
+    pub split: Option<&'static str>,
     /// Flights per method.
     pub flights: usize,
     /// One result per method compared.
@@ -146,6 +194,7 @@ pub struct CompareRun {
     cases: Vec<Case>,
     logs: Vec<(String, LogData)>,
     seeds: Vec<u64>,
+    split: Option<Split>,
     /// Samples of the current case (simulated once, run by every method).
     current: Option<(usize, Vec<Sample>)>,
     next: usize,
@@ -164,18 +213,31 @@ impl CompareRun {
         if seeds.is_empty() {
             return Err("compare: seeds must not be empty".into());
         }
+        Ok(Self::with_cases(battery(seeds), seeds.to_vec(), None, methods, clock))
+    }
+
+    /// The same over `flights` flights (1..=1000) of the randomised
+    /// battery's `split`.
+    pub fn new_battery(split: Split, flights: u64, methods: &[Method], clock: Option<fn() -> f64>) -> Result<Self, String> {
+        if !(1..=1000).contains(&flights) {
+            return Err(format!("compare: flights must be in 1..=1000, got {flights}"));
+        }
+        Ok(Self::with_cases(battery_cases(split, flights), vec![], Some(split), methods, clock))
+    }
+
+    fn with_cases(cases: Vec<Case>, seeds: Vec<u64>, split: Option<Split>, methods: &[Method], clock: Option<fn() -> f64>) -> Self {
         let methods = if methods.is_empty() { Method::ALL.to_vec() } else { methods.to_vec() };
-        let cases = battery(seeds);
-        Ok(CompareRun {
+        CompareRun {
             acc: methods.iter().map(|_| Acc::default()).collect(),
             methods,
             cases,
             logs: vec![],
-            seeds: seeds.to_vec(),
+            seeds,
+            split,
             current: None,
             next: 0,
             clock: clock.unwrap_or(no_clock),
-        })
+        }
     }
 
     /// Add a real log (run by every method, reported by name).
@@ -209,7 +271,7 @@ impl CompareRun {
         let cfg = Config { method, ..Config::default() };
         if item < self.cases.len() {
             if self.current.as_ref().is_none_or(|(i, _)| *i != item) {
-                let rows = sim::simulate(&self.cases[item].scenario)?;
+                let rows = self.cases[item].flight.simulate()?;
                 self.current = Some((item, rows));
             }
             let rows = match &self.current {
@@ -224,7 +286,7 @@ impl CompareRun {
             acc.seconds += dt;
             let case = &self.cases[item];
             if case.group == "clean" {
-                acc.clean_s += case.scenario.duration;
+                acc.clean_s += case.flight.duration();
                 let mut prev = 0u8;
                 for (s, o) in rows.iter().zip(&out) {
                     if !s.label.is_nan() {
@@ -313,7 +375,7 @@ impl CompareRun {
                 }
             })
             .collect();
-        Ok(Comparison { seeds: self.seeds, flights: self.cases.len(), methods })
+        Ok(Comparison { seeds: self.seeds, split: self.split.map(Split::name), flights: self.cases.len(), methods })
     }
 }
 
@@ -352,12 +414,18 @@ fn method_header(s: &mut String, first: &str, c: &Comparison) {
 /// The comparison as Markdown tables (what the README shows).
 pub fn markdown(c: &Comparison) -> String {
     let mut s = String::new();
-    s.push_str(&format!(
-        "{} simulated flights ({} seeds: {:?}); fault-flight rates pooled over labelled GPS epochs; false alarms per hour on the clean flights.\n\n",
-        c.flights,
-        c.seeds.len(),
-        c.seeds
-    ));
+    match c.split {
+        Some(split) => s.push_str(&format!(
+            "{} flights of the randomised battery's {split} split (`src/battery.rs`); fault-flight rates pooled over labelled GPS epochs; false alarms per hour on the clean flights.\n\n",
+            c.flights
+        )),
+        None => s.push_str(&format!(
+            "{} simulated flights ({} seeds: {:?}); fault-flight rates pooled over labelled GPS epochs; false alarms per hour on the clean flights.\n\n",
+            c.flights,
+            c.seeds.len(),
+            c.seeds
+        )),
+    }
     s.push_str("| method | accuracy | false alarm | misdetection | F2 | false alarms / h (clean) | clean epochs flagged |\n|---|---|---|---|---|---|---|\n");
     let best = c.methods.iter().map(|m| m.metrics.f2).fold(f64::NEG_INFINITY, f64::max);
     for m in &c.methods {
@@ -432,6 +500,25 @@ mod tests {
         run.add_log("imu.csv", log);
         let md = markdown(&run.finish().unwrap());
         assert!(md.contains("| imu.csv (0 epochs) | no verdict |"), "{md}");
+    }
+
+    /// The randomised battery's flights, reported under their first
+    /// fault's kind, run by each method; the split is named in the result
+    /// and the Markdown.
+    #[test]
+    fn the_randomised_battery_runs_every_method_on_the_same_flights() {
+        let cases = battery_cases(Split::Eval, 6);
+        let groups: Vec<&str> = cases.iter().map(|c| c.group.as_str()).collect();
+        let want: Vec<String> = (0..6).map(|i| battery::Flight::draw(Split::Eval, i).faults.first().map_or_else(|| "clean".to_string(), battery::kind_key)).collect();
+        assert_eq!(groups, want);
+        assert!(CompareRun::new_battery(Split::Eval, 0, &[], None).is_err());
+        let c = CompareRun::new_battery(Split::Eval, 2, &[Method::Anfis, Method::Gate], None).unwrap().finish().unwrap();
+        assert_eq!((c.flights, c.split, c.methods.len()), (2, Some("eval"), 2));
+        // Same flights, same labels: the two methods' epoch counts agree.
+        let n = |m: &MethodResult| m.metrics.tp + m.metrics.fp + m.metrics.tn + m.metrics.r#fn;
+        assert_eq!(n(&c.methods[0]), n(&c.methods[1]));
+        assert!(n(&c.methods[0]) > 100);
+        assert!(markdown(&c).starts_with("2 flights of the randomised battery's eval split"));
     }
 
     #[test]

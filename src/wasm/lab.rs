@@ -10,7 +10,8 @@ use crate::sim;
 
 #[wasm_bindgen(typescript_custom_section)]
 const TS_LAB: &'static str = r#"
-export interface CompareOptions { seeds?: number; methods?: string[] }
+/** `battery`: run `flights` flights (default 48) of the randomised battery's split ("tune" or "eval") instead of the seeded one; `seeds` does not go with it. */
+export interface CompareOptions { seeds?: number; methods?: string[]; battery?: "tune" | "eval"; flights?: number }
 export interface CompareResult { comparison: object; markdown: string }
 "#;
 
@@ -55,6 +56,10 @@ struct CompareOptions {
     /// Number of seeds (1..=n), default 5.
     seeds: Option<f64>,
     methods: Option<Vec<String>>,
+    /// The randomised battery's split instead of the seeded battery.
+    battery: Option<String>,
+    /// Flights of the randomised battery, default 48.
+    flights: Option<f64>,
 }
 
 #[wasm_bindgen]
@@ -62,11 +67,6 @@ impl CompareRun {
     #[wasm_bindgen(constructor)]
     pub fn new(#[wasm_bindgen(js_name = options, unchecked_param_type = "CompareOptions | undefined")] opts: JsValue) -> Result<CompareRun, JsError> {
         let o: CompareOptions = options(&opts, "compare options")?;
-        let n = o.seeds.unwrap_or(5.0);
-        if !(n.is_finite() && n.fract() == 0.0 && (1.0..=100.0).contains(&n)) {
-            return Err(err(format!("compare options.seeds: must be an integer in 1..=100, got {n}")));
-        }
-        let seeds: Vec<u64> = (1..=n as u64).collect();
         let methods = o
             .methods
             .unwrap_or_default()
@@ -74,6 +74,26 @@ impl CompareRun {
             .map(|m| crate::methods::Method::parse(m).map_err(|e| e.to_string().replace("config.method", "compare options.methods")))
             .collect::<Result<Vec<_>, _>>()
             .map_err(err)?;
+        if let Some(split) = &o.battery {
+            let split = crate::battery::Split::parse(split).map_err(|e| err(format!("compare options.battery: {e}")))?;
+            if o.seeds.is_some() {
+                return Err(err("compare options.seeds: does not go with options.battery (use options.flights)"));
+            }
+            let n = o.flights.unwrap_or(48.0);
+            if !(n.is_finite() && n.fract() == 0.0 && (1.0..=1000.0).contains(&n)) {
+                return Err(err(format!("compare options.flights: must be an integer in 1..=1000, got {n}")));
+            }
+            let run = crate::compare::CompareRun::new_battery(split, n as u64, &methods, Some(js_clock)).map_err(err)?;
+            return Ok(CompareRun { run: Some(run) });
+        }
+        if o.flights.is_some() {
+            return Err(err("compare options.flights: goes with options.battery only"));
+        }
+        let n = o.seeds.unwrap_or(5.0);
+        if !(n.is_finite() && n.fract() == 0.0 && (1.0..=100.0).contains(&n)) {
+            return Err(err(format!("compare options.seeds: must be an integer in 1..=100, got {n}")));
+        }
+        let seeds: Vec<u64> = (1..=n as u64).collect();
         Ok(CompareRun { run: Some(crate::compare::CompareRun::new(&seeds, &methods, Some(js_clock)).map_err(err)?) })
     }
 

@@ -171,6 +171,25 @@ test('compare: every requested method over the battery; --update-readme rewrites
   assert.match(bad.stderr, /magic/);
 });
 
+test('compare --battery: every method on the same flights of the randomised battery (issue 14)', () => {
+  const out = execFileSync(process.execPath, [cli, 'compare', '--battery', 'eval', '--flights', '3', '--methods', 'anfis,gate', '--json'], { encoding: 'utf8' });
+  const c = JSON.parse(out);
+  assert.equal(c.split, 'eval');
+  assert.equal(c.flights, 3);
+  assert.deepEqual(c.methods.map((m) => m.method), ['anfis', 'gate']);
+  const n = (m) => m.metrics.tp + m.metrics.fp + m.metrics.tn + m.metrics.fn;
+  assert.ok(n(c.methods[0]) > 100 && n(c.methods[0]) === n(c.methods[1]), JSON.stringify(c.methods.map((m) => m.metrics)));
+  // Eval flight 0 has a GPS outage: every method flags it.
+  for (const m of c.methods) assert.ok(m.kinds.find((k) => k.group === 'outage').detected >= 1, JSON.stringify(m.kinds));
+  const md = execFileSync(process.execPath, [cli, 'compare', '--battery', 'tune', '--flights', '1', '--methods', 'anfis'], { encoding: 'utf8' });
+  assert.match(md, /^1 flights of the randomised battery's tune split/);
+  for (const [args, re] of [[['--battery', 'eval', '--seeds', '2'], /--seeds does not go with --battery/], [['--flights', '2'], /--flights goes with --battery/], [['--battery', 'holdout'], /compare options\.battery/]]) {
+    const bad = spawnSync(process.execPath, [cli, 'compare', ...args], { encoding: 'utf8' });
+    assert.equal(bad.status, 2, bad.stderr);
+    assert.match(bad.stderr, re);
+  }
+});
+
 test('TypeScript types describe config, sample and results (no any)', () => {
   const dts = readFileSync(join(root, 'pkg', 'index.d.ts'), 'utf8');
   assert.match(dts, /push\(sample: NavSample\): PushResult/);
