@@ -6,7 +6,7 @@ use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
 use super::interop::{self as js_in, err, set, to_js, MAX_BYTES};
-use crate::detector::{Detector as CoreDetector, Output, Stats};
+use crate::detector::{row_from_values, rows_from_columns, Detector as CoreDetector, Output, OutputColumns, Stats};
 use crate::sample::{Sample, COLUMNS};
 
 thread_local! {
@@ -149,16 +149,6 @@ pub struct Detector {
 /// `Detector::io`: the row's 27 columns, then `[t, status, f, r, c, kind, gpsEpoch]`.
 const IO_LEN: usize = COLUMNS.len() + 7;
 
-/// One chunk of `pushColumns` results, then copied into the JS arrays.
-#[derive(Default)]
-struct ChunkOut {
-    status: Vec<u8>,
-    kind: Vec<u8>,
-    f: Vec<f64>,
-    r: Vec<f64>,
-    c: Vec<f64>,
-}
-
 #[wasm_bindgen]
 impl Detector {
     fn wrap(inner: CoreDetector) -> Detector {
@@ -205,11 +195,7 @@ impl Detector {
         if self.row.len() != COLUMNS.len() {
             return Err(err(format!("{what}: expected {} values, got {}", COLUMNS.len(), self.row.len())));
         }
-        let mut s = Sample::default();
-        for (i, v) in self.row.iter().enumerate() {
-            s.set(i, *v);
-        }
-        Ok(s)
+        Ok(row_from_values(&self.row))
     }
 
     /// Push one row given as the 27 columns in `COLUMNS` order
@@ -254,16 +240,7 @@ impl Detector {
     /// an API (the package's `push` is). Touches no JS value.
     #[wasm_bindgen(js_name = __pushIo)]
     pub fn push_io(&mut self) -> Result<(), JsError> {
-        let mut s = Sample::default();
-        for (i, v) in self.io.iter().take(COLUMNS.len()).enumerate() {
-            s.set(i, *v);
-        }
-        let o = self.inner.push(&s).map_err(err)?;
-        let vals = output_row(&o);
-        for (d, v) in self.io.iter_mut().skip(COLUMNS.len()).zip(vals) {
-            *d = v;
-        }
-        Ok(())
+        self.inner.push_values(&mut self.io[..]).map_err(err)
     }
 
     /// Rows accepted so far (the next row's index in error messages).
@@ -301,24 +278,13 @@ impl Detector {
         let new = |c: &JsValue| js_in::new_typed(c, n, "pushColumns: result").map_err(err);
         let (status, f, r, c, kind) = (new(&u8c)?, new(&f64c)?, new(&f64c)?, new(&f64c)?, new(&u8c)?);
         // Pass 2: push. A single chunk is still loaded from pass 1.
-        let mut o = ChunkOut::default();
+        let mut o = OutputColumns::default();
         for &(a, b) in &chunks {
             if chunks.len() > 1 {
                 self.load_chunk(&src, a, b)?;
             }
-            o.status.clear();
-            o.kind.clear();
-            o.f.clear();
-            o.r.clear();
-            o.c.clear();
-            for s in &self.rows {
-                let out = self.inner.push_valid(s);
-                o.status.push(out.status);
-                o.kind.push(out.kind);
-                o.f.push(out.f);
-                o.r.push(out.r);
-                o.c.push(out.c);
-            }
+            o.clear();
+            self.inner.push_valid_batch(&self.rows, &mut o);
             // Our own fresh arrays, sized n: these writes cannot fail.
             let w = "pushColumns: result";
             js_in::write_u8(&status, a, &o.status, w).map_err(err)?;
@@ -348,8 +314,7 @@ impl Detector {
             }
         }
         let c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| self.cols.get(i).map_or(&[][..], |v| &v[..]));
-        self.rows.clear();
-        self.rows.extend((0..b - a).map(|j| Sample::from_columns(&c, j)));
+        rows_from_columns(&c, b - a, &mut self.rows);
         Ok(())
     }
 

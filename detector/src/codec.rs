@@ -370,15 +370,17 @@ impl Codec for UnitQuaternion<f64> {
 macro_rules! impl_codec {
     ($name:ident $(<const $g:ident: usize>)? { $($field:ident),* $(,)? } $(skip { $($skip:ident),* $(,)? })?) => {
         impl$(<const $g: usize>)? $crate::codec::Codec for $name$(<$g>)? {
-            // One function per struct (not inlined into its parent's): the
-            // codec is cold code, kept small.
-            #[inline(never)]
+            // `#[inline]`: compiled in the crate that snapshots and
+            // restores (the core wasm module builds that one for size; this
+            // crate is built for speed), and inlined only where that is
+            // smaller. The codec is cold code.
+            #[inline]
             #[allow(non_snake_case)] // the filter's `P`
             fn encode(&self, w: &mut Vec<u8>) {
                 let $name { $($field,)* $($($skip: _,)*)? } = self;
                 $($crate::codec::Codec::encode($field, w);)*
             }
-            #[inline(never)]
+            #[inline]
             fn decode(r: &mut $crate::codec::Reader<'_>) -> Self {
                 // Struct literal fields are evaluated in the order written.
                 $name {
@@ -397,10 +399,12 @@ macro_rules! impl_codec {
 macro_rules! impl_codec_enum {
     ($name:ident { $first:ident = $i0:literal $(, $variant:ident = $i:literal)* $(,)? }) => {
         impl $crate::codec::Codec for $name {
+            #[inline] // see `impl_codec`
             fn encode(&self, w: &mut Vec<u8>) {
                 let i: u32 = match self { $name::$first => $i0, $($name::$variant => $i,)* };
                 $crate::codec::Codec::encode(&i, w);
             }
+            #[inline] // see `impl_codec`
             fn decode(r: &mut $crate::codec::Reader<'_>) -> Self {
                 match r.variant() {
                     $i0 => $name::$first,

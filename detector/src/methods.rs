@@ -363,9 +363,9 @@ impl PoolState {
 }
 
 /// The pools of `rms`, `knee` and `adaptive` (in that order), as shipped in
-/// `src/default_pools.bin` ([`crate::codec`] bytes, postcard's, so every
+/// `detector/src/default_pools.bin` ([`crate::codec`] bytes, postcard's, so every
 /// f64 is bit-exact). They were
-/// fitted on clean simulated flights by [`crate::calibrate::fit_pools`] over
+/// fitted on clean simulated flights by `navguard::calibrate::fit_pools` (the lab) over
 /// seeds [`POOL_SEEDS`]; a test refits them and compares the bytes.
 pub const EMBEDDED_POOLS: &[u8] = include_bytes!("default_pools.bin");
 
@@ -375,6 +375,7 @@ pub const POOL_SEEDS: core::ops::Range<u64> = 1000..1006;
 /// The pool for `method` (rms, knee or adaptive): the embedded pools, decoded
 /// once per process and cloned. Speed bands split the training epochs into
 /// quartiles.
+#[inline]
 pub fn default_pool(method: Method) -> Result<PoolState, String> {
     use std::sync::OnceLock;
     static POOLS: OnceLock<Result<[PoolState; 3], String>> = OnceLock::new();
