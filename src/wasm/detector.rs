@@ -2,10 +2,10 @@
 //! and the contract's column names. Core module.
 
 use js_sys::{Array, Object, Uint8Array};
-use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
-use super::interop::{self as js_in, err, set, to_js, MAX_BYTES};
+use super::interop::{self as js_in, err, set, Obj, MAX_BYTES};
+use crate::config::Config;
 use crate::detector::{row_from_values, rows_from_columns, Detector as CoreDetector, Output, OutputColumns, Stats};
 use crate::sample::{Sample, COLUMNS};
 
@@ -28,50 +28,50 @@ fn output_row(o: &Output) -> [f64; 7] {
     [o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }]
 }
 
-/// One push result as JS sees it.
-#[derive(Serialize)]
-#[serde(rename_all = "camelCase")]
-struct PushResult {
-    t: f64,
-    status: u8,
-    f: f64,
-    r: f64,
-    c: f64,
-    kind: u8,
-    gps_epoch: bool,
-}
-
+/// One push result as JS sees it: `{ t, status, f, r, c, kind, gpsEpoch }`.
 fn output_object(o: &Output) -> Result<JsValue, JsError> {
-    to_js(&PushResult { t: o.t, status: o.status, f: o.f, r: o.r, c: o.c, kind: o.kind, gps_epoch: o.gps_epoch })
+    Ok(Obj::new().n("t", o.t).n("status", o.status as f64).n("f", o.f).n("r", o.r).n("c", o.c).n("kind", o.kind as f64).b("gpsEpoch", o.gps_epoch).done())
 }
 
 /// The detector's counters as JS sees them (camelCase, like the rest of the API).
-#[derive(Serialize)]
-#[serde(rename_all = "camelCase")]
-pub(super) struct DetectorStats {
-    rows: u64,
-    gps_epochs: u64,
-    imu_rows: u64,
-    baro_rows: u64,
-    retrains: u64,
-    filter_resets: u64,
-    data_gaps: u64,
-    filter_errors: u64,
+pub(super) fn stats_object(s: &Stats) -> JsValue {
+    Obj::new()
+        .n("rows", s.rows as f64)
+        .n("gpsEpochs", s.gps_epochs as f64)
+        .n("imuRows", s.imu_rows as f64)
+        .n("baroRows", s.baro_rows as f64)
+        .n("retrains", s.retrains as f64)
+        .n("filterResets", s.filter_resets as f64)
+        .n("dataGaps", s.data_gaps as f64)
+        .n("filterErrors", s.filter_errors as f64)
+        .done()
 }
 
-impl From<&Stats> for DetectorStats {
-    fn from(s: &Stats) -> Self {
-        DetectorStats {
-            rows: s.rows,
-            gps_epochs: s.gps_epochs,
-            imu_rows: s.imu_rows,
-            baro_rows: s.baro_rows,
-            retrains: s.retrains,
-            filter_resets: s.filter_resets,
-            data_gaps: s.data_gaps,
-            filter_errors: s.filter_errors,
-        }
-    }
+/// The checked config as JS sees it: the fields of `Config` as they are
+/// named in Rust (snake_case, as the API has always returned them), the
+/// model left out.
+fn config_object(c: &Config) -> JsValue {
+    let n = &c.noise;
+    let noise = Obj::new()
+        .n("gps_pos_sigma", n.gps_pos_sigma)
+        .n("gps_alt_sigma", n.gps_alt_sigma)
+        .n("gps_vel_sigma", n.gps_vel_sigma)
+        .n("baro_sigma", n.baro_sigma)
+        .n("accel_noise", n.accel_noise)
+        .n("cv_accel_noise", n.cv_accel_noise)
+        .done();
+    Obj::new()
+        .s("method", c.method.name())
+        .n("tc", c.tc as f64)
+        .n("q", c.q as f64)
+        .n("window", c.window as f64)
+        .n("threshold", c.threshold)
+        .b("retrain", c.retrain)
+        .v("noise", &noise)
+        .opt("outage_timeout", c.outage_timeout)
+        .n("max_coast", c.max_coast)
+        .n("data_gap", c.data_gap)
+        .done()
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -321,13 +321,13 @@ impl Detector {
     /// Counters: rows, GPS epochs, retrains, resets, data gaps.
     #[wasm_bindgen(unchecked_return_type = "DetectorStats")]
     pub fn stats(&self) -> Result<JsValue, JsError> {
-        to_js(&DetectorStats::from(&self.inner.stats()))
+        Ok(stats_object(&self.inner.stats()))
     }
 
     /// The checked configuration in use.
     #[wasm_bindgen(unchecked_return_type = "object")]
     pub fn config(&self) -> Result<JsValue, JsError> {
-        to_js(self.inner.config())
+        Ok(config_object(self.inner.config()))
     }
 
     /// The whole detector state (filter, windows, D1/D2, ANFIS, counters,
@@ -387,7 +387,8 @@ fn column_sources(columns: &JsValue) -> Result<(Vec<Option<js_in::F64Source>>, u
 #[wasm_bindgen(js_name = snapshotInfo, unchecked_return_type = "SnapshotInfo")]
 pub fn snapshot_info(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] snapshot: &JsValue) -> Result<JsValue, JsError> {
     let bytes = js_in::bytes(snapshot, MAX_BYTES, "snapshotInfo: snapshot").map_err(err)?;
-    to_js(&crate::snapshot::info(&bytes).map_err(err)?)
+    let i = crate::snapshot::info(&bytes).map_err(err)?;
+    Ok(Obj::new().n("version", i.version as f64).s("crateVersion", &i.crate_version).n("bytes", i.bytes as f64).done())
 }
 
 /// The wasm memory, for the package's `push` fast path; not an API.

@@ -440,3 +440,62 @@ pub fn to_js<T: Serialize + ?Sized>(x: &T) -> Result<JsValue, JsError> {
 pub fn set(o: &Object, k: &str, v: &JsValue) {
     let _ = Reflect::set(o, &JsValue::from_str(k), v);
 }
+
+/// A result as a plain JS object, built field by field: what [`to_js`]
+/// gives for a struct (its fields in declaration order, `None` as a field
+/// holding `undefined`, integers as numbers), without serde's code in the
+/// core module. The core module's results are built with it; the lab's
+/// still go through [`to_js`].
+pub struct Obj(Object);
+
+impl Obj {
+    /// An empty plain object.
+    pub fn new() -> Obj {
+        Obj(Object::new())
+    }
+    /// `k`: any JS value.
+    pub fn v(self, k: &str, v: &JsValue) -> Obj {
+        set(&self.0, k, v);
+        self
+    }
+    /// `k`: a number (an integer counter as serde-wasm-bindgen writes it, as
+    /// an f64).
+    pub fn n(self, k: &str, v: f64) -> Obj {
+        self.v(k, &JsValue::from_f64(v))
+    }
+    /// `k`: a number, or `undefined` for `None` (the field is still there).
+    pub fn opt(self, k: &str, v: Option<f64>) -> Obj {
+        self.v(k, &v.map_or(JsValue::UNDEFINED, JsValue::from_f64))
+    }
+    /// `k`: a boolean.
+    pub fn b(self, k: &str, v: bool) -> Obj {
+        self.v(k, &JsValue::from_bool(v))
+    }
+    /// `k`: a string.
+    pub fn s(self, k: &str, v: &str) -> Obj {
+        self.v(k, &JsValue::from_str(v))
+    }
+    /// The object.
+    pub fn done(self) -> JsValue {
+        self.0.into()
+    }
+}
+
+/// A JS array of the values `f` makes of `items`.
+pub fn array_of<T>(items: &[T], f: impl Fn(&T) -> JsValue) -> JsValue {
+    let a = Array::new();
+    for x in items {
+        a.push(&f(x));
+    }
+    a.into()
+}
+
+/// Strings as a JS array of strings.
+pub fn strings(items: &[String]) -> JsValue {
+    array_of(items, |s| JsValue::from_str(s))
+}
+
+/// `(key, value)` pairs as a JS array of two-element arrays.
+pub fn string_pairs(items: &[(String, String)]) -> JsValue {
+    array_of(items, |(k, v)| Array::of2(&JsValue::from_str(k), &JsValue::from_str(v)).into())
+}
