@@ -174,7 +174,10 @@ mod tests {
 
     /// The shipped pools are exactly what the simulator gives, byte for
     /// byte. `NAVGUARD_WRITE_POOLS=1 cargo test --release --lib embedded_pools`
-    /// rewrites `detector/src/default_pools.bin` after a deliberate change.
+    /// rewrites `detector/src/default_pools.bin` after a deliberate change;
+    /// then `NAVGUARD_WRITE_POOLS=1 cargo test --release -p navguard-detector
+    /// --lib packed_pools` packs it into `default_pools.lz`, what the crate
+    /// embeds.
     #[test]
     fn embedded_pools_are_reproduced_exactly() {
         let pools = fit_pools(POOL_SEEDS).unwrap();
