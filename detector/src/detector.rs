@@ -132,10 +132,29 @@ pub fn rows_from_columns(cols: &[&[f64]; crate::sample::COLUMNS.len()], n: usize
     rows.extend((0..n).map(|j| Sample::from_columns(cols, j)));
 }
 
+/// Column `i` (in [`COLUMNS`](crate::sample::COLUMNS) order) of `rows` into
+/// `out`, replacing its contents; false (and `out` untouched) when every
+/// value in it is NaN (absent). For `readLog`'s columns, here for the same
+/// reason as [`rows_from_columns`].
+#[inline(never)]
+pub fn column_of_rows(rows: &[Sample], i: usize, out: &mut Vec<f64>) -> bool {
+    if !rows.iter().any(|s| !s.get(i).is_nan()) {
+        return false;
+    }
+    out.clear();
+    out.extend(rows.iter().map(|s| s.get(i)));
+    true
+}
+
 /// One row from its values in [`COLUMNS`](crate::sample::COLUMNS) order
 /// (see [`rows_from_columns`]; missing values read as NaN).
 #[inline(never)] // see `Detector::validate`
 pub fn row_from_values(values: &[f64]) -> Sample {
+    row_of(values)
+}
+
+#[inline]
+fn row_of(values: &[f64]) -> Sample {
     let mut s = Sample::default();
     for (i, v) in values.iter().take(crate::sample::COLUMNS.len()).enumerate() {
         s.set(i, *v);
@@ -1760,6 +1779,29 @@ impl Detector {
     // caller's opt-level (the range check is then not vectorised).
     #[inline(never)]
     pub fn validate(&self, s: &Sample, row: u64) -> Result<(), InputError> {
+        self.check_row(s, row)
+    }
+
+    /// [`Detector::validate`] over a batch (row numbers from `first_row`),
+    /// and the batch's own time order from `*last_t` on (updated to the
+    /// last good row's time): the first bad row's index in `rows`, with its
+    /// error, or `None` when its time goes back from the row before it
+    /// (`*last_t`). The wasm facade's first pass over a batch; here so that
+    /// it runs at the row path's opt-level (see `validate`).
+    #[inline(never)]
+    pub fn validate_batch(&self, rows: &[Sample], first_row: u64, last_t: &mut f64) -> Result<(), (usize, Option<InputError>)> {
+        for (k, s) in rows.iter().enumerate() {
+            self.check_row(s, first_row + k as u64).map_err(|e| (k, Some(e)))?;
+            if s.t < *last_t {
+                return Err((k, None));
+            }
+            *last_t = s.t;
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn check_row(&self, s: &Sample, row: u64) -> Result<(), InputError> {
         validate_sample(s, row)?;
         if let Some(lt) = self.clock.last_t {
             if s.t < lt {
@@ -1776,7 +1818,7 @@ impl Detector {
     /// Process one row. On `Err` nothing changed.
     #[inline(never)] // see `validate`
     pub fn push(&mut self, s: &Sample) -> Result<Output, InputError> {
-        self.validate(s, self.stats.rows)?;
+        self.check_row(s, self.stats.rows)?;
         Ok(self.push_valid(s))
     }
 
@@ -1820,7 +1862,9 @@ impl Detector {
     #[inline(never)] // see `validate`
     pub fn push_values(&mut self, io: &mut [f64]) -> Result<(), InputError> {
         let n = crate::sample::COLUMNS.len();
-        let o = self.push(&row_from_values(io))?;
+        let s = row_of(io);
+        self.check_row(&s, self.stats.rows)?;
+        let o = self.push_valid(&s);
         let vals = [o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }];
         for (d, v) in io.iter_mut().skip(n).zip(vals) {
             *d = v;
@@ -2206,7 +2250,6 @@ fn row_is_plainly_valid(s: &Sample) -> bool {
 
 /// Check one row: `t` present and finite, no infinities, every value in its
 /// range, sensor groups complete (all three axes or none).
-#[inline(never)] // see `Detector::validate`
 pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
     if row_is_plainly_valid(s) && (s.qw.is_nan() || quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_some()) {
         return Ok(());

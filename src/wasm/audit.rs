@@ -8,6 +8,7 @@ use super::detector::stats_object;
 use super::interop::{self as js_in, array_of, config_from, err, set, string_pairs, strings, Obj, MAX_BYTES, MAX_VALUES};
 use crate::logs::extras::EphSource;
 use crate::audit;
+use crate::detector::column_of_rows;
 use crate::logs;
 use crate::metrics;
 use crate::sample::COLUMNS;
@@ -270,15 +271,11 @@ pub fn read_log(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsV
     let bytes = js_in::bytes(bytes, MAX_BYTES, "readLog: bytes").map_err(err)?;
     let log = logs::read_any(&bytes)?;
     let cols = Object::new();
-    let mut buf = vec![0.0; log.samples.len()];
+    let mut buf = Vec::new();
     for (i, name) in COLUMNS.iter().enumerate() {
-        if !log.samples.iter().any(|s| !s.get(i).is_nan()) {
-            continue;
+        if column_of_rows(&log.samples, i, &mut buf) {
+            set(&cols, name, &Float64Array::from(&buf[..]).into());
         }
-        for (j, s) in log.samples.iter().enumerate() {
-            buf[j] = s.get(i);
-        }
-        set(&cols, name, &Float64Array::from(&buf[..]).into());
     }
     let topics = array_of(&log.topic_counts, |(k, n)| js_sys::Array::of2(&JsValue::from_str(k), &JsValue::from_f64(*n as f64)).into());
     Ok(Obj::new()

@@ -265,13 +265,15 @@ impl Detector {
         let chunks: Vec<(usize, usize)> = (0..n).step_by(CHUNK_ROWS).map(|a| (a, (a + CHUNK_ROWS).min(n))).collect();
         for &(a, b) in &chunks {
             self.load_chunk(&src, a, b)?;
-            for (k, s) in self.rows.iter().enumerate() {
+            if let Err((k, e)) = self.inner.validate_batch(&self.rows, base + a as u64, &mut last_t) {
                 let j = a + k;
-                self.inner.validate(s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
-                if s.t < last_t {
-                    return Err(err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, s.t, last_t)));
-                }
-                last_t = s.t;
+                return Err(match e {
+                    Some(e) => err(format!("{e} (batch index {j})")),
+                    None => {
+                        let t = self.rows.get(k).map_or(f64::NAN, |s| s.t);
+                        err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, t, last_t))
+                    }
+                });
             }
         }
         let (u8c, f64c) = (js_in::u8_ctor(), js_in::f64_ctor());
@@ -307,10 +309,8 @@ impl Detector {
         for (i, (s, buf)) in src.iter().zip(self.cols.iter_mut()).enumerate() {
             match s {
                 Some(s) => s.read(a, b, buf, &format!("pushColumns: column '{}'", COLUMNS.get(i).copied().unwrap_or("?"))).map_err(err)?,
-                None => {
-                    buf.clear();
-                    buf.resize(b - a, f64::NAN);
-                }
+                // An empty column reads as NaN (absent) in `rows_from_columns`.
+                None => buf.clear(),
             }
         }
         let c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| self.cols.get(i).map_or(&[][..], |v| &v[..]));

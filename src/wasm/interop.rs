@@ -191,11 +191,24 @@ fn unreadable(what: &str, e: &JsValue) -> String {
     format!("{what}: unreadable (detached buffer?): {}", describe(e))
 }
 
+/// Element types whose all-zero bytes are a value (0, 0.0).
+trait Zeroable: Copy {}
+impl Zeroable for u8 {}
+impl Zeroable for f64 {}
+
 /// Copy the whole typed array `src` (of `n` elements, as checked) into `dst`.
-fn copy_all<E: Copy + Default>(src: &JsValue, n: usize, dst: &mut Vec<E>, view: unsafe fn(*mut E, usize) -> JsValue, what: &str) -> Result<(), String> {
+fn copy_all<E: Zeroable>(src: &JsValue, n: usize, dst: &mut Vec<E>, view: unsafe fn(*mut E, usize) -> JsValue, what: &str) -> Result<(), String> {
     dst.clear();
     dst.try_reserve_exact(n).map_err(|_| format!("{what}: cannot allocate {n} elements"))?;
-    dst.resize(n, E::default());
+    // Zeroed in one `memory.fill` (this crate is built for size in the core
+    // module, where `resize` would be a loop over the elements, megabytes
+    // of a log).
+    // SAFETY: `n` elements were reserved, and all-zero bytes are a value of
+    // `E` (`Zeroable`).
+    unsafe {
+        core::ptr::write_bytes(dst.as_mut_ptr(), 0, n);
+        dst.set_len(n);
+    }
     // SAFETY: the view covers `dst`'s n initialised elements and is used at
     // once, before anything can allocate in wasm memory.
     let v = unsafe { view(dst.as_mut_ptr(), n) };

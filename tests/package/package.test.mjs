@@ -30,10 +30,10 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // 3 while the facade, audits, snapshot and restore are built for size,
 // results built as JS objects by hand (no serde-wasm-bindgen) and the
 // readers' few sorts through one merge sort and the threshold pools
-// embedded packed (LZ77, codec::unpack), it is 410 KB: the row path,
+// embedded packed (LZ77, codec::unpack), it is 411 KB: the row path,
 // the readers, audits and the facade make up the rest (README, Speed and
 // size). Lower this as the core shrinks (about 1% over the measured size).
-const CORE_WASM_BUDGET = 414_100;
+const CORE_WASM_BUDGET = 415_400;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;
