@@ -1,4 +1,4 @@
-//! Accelerometer-bias tuning probe (the figures in `src/indicators.rs`).
+//! Accelerometer-bias tuning probe (the figures in `detector/src/indicators.rs`).
 //!
 //! `accel_probe sweep`: accel-bias of 0.2/0.3/0.5/1 m/s² on the three
 //! trajectories, seeds 101–110, starts 40–200 s, plus 85,000 clean epochs

@@ -1,6 +1,6 @@
 //! Everything fitted offline, kept out of the detector's path: the ANFIS
 //! model trainer ([`train_model`], run by `navguard-train`), the Baek & Jo
-//! threshold pools ([`fit_pools`], shipped as `src/default_pools.bin`) and
+//! threshold pools ([`fit_pools`], shipped as `detector/src/default_pools.bin`) and
 //! the Mahalanobis threshold ([`calibrate_mahalanobis`], shipped as
 //! [`MAHA_D2`]). Each runs the detector over simulated or labelled flights,
 //! so this module sits above [`crate::detector`] and [`crate::sim`]; the
@@ -174,7 +174,10 @@ mod tests {
 
     /// The shipped pools are exactly what the simulator gives, byte for
     /// byte. `NAVGUARD_WRITE_POOLS=1 cargo test --release --lib embedded_pools`
-    /// rewrites `src/default_pools.bin` after a deliberate change.
+    /// rewrites `detector/src/default_pools.bin` after a deliberate change;
+    /// then `NAVGUARD_WRITE_POOLS=1 cargo test --release -p navguard-detector
+    /// --lib packed_pools` packs it into `default_pools.lz`, what the crate
+    /// embeds.
     #[test]
     fn embedded_pools_are_reproduced_exactly() {
         let pools = fit_pools(POOL_SEEDS).unwrap();
@@ -182,10 +185,10 @@ mod tests {
         // The codec the crate reads them with writes the same bytes.
         assert!(crate::codec::to_bytes(&pools) == bytes, "codec and postcard differ on the pools");
         if std::env::var_os("NAVGUARD_WRITE_POOLS").is_some() {
-            std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/src/default_pools.bin"), &bytes).unwrap();
+            std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/detector/src/default_pools.bin"), &bytes).unwrap();
         }
-        assert_eq!(bytes.len(), EMBEDDED_POOLS.len(), "refitted pools differ in size from src/default_pools.bin");
-        assert!(bytes == EMBEDDED_POOLS, "refitted pools differ from src/default_pools.bin");
+        assert_eq!(bytes.len(), EMBEDDED_POOLS.len(), "refitted pools differ in size from detector/src/default_pools.bin");
+        assert!(bytes == EMBEDDED_POOLS, "refitted pools differ from detector/src/default_pools.bin");
         // And they decode to the same thresholds the detector uses.
         for (k, m) in [Method::Rms, Method::Knee, Method::Adaptive].into_iter().enumerate() {
             let shipped = crate::methods::default_pool(m).unwrap();

@@ -4,27 +4,17 @@
 //! detector of Sun et al. 2017, with a thin wasm-bindgen facade in
 //! [`wasm`] (compiled for `wasm32` only).
 
-pub mod anfis;
 pub mod audit;
+// The detector and everything its row path runs: crate `navguard-detector`
+// (built at opt-level 3 in the core wasm module while this crate is built
+// for size), re-exported module by module.
+pub use navguard_detector::{anfis, codec, config, detector, error, filter, frames, indicators, methods, model, rng, snapshot, thresholds, track};
 pub mod battery;
 pub mod calibrate;
-pub mod codec;
 pub mod compare;
-pub mod config;
-pub mod detector;
-pub mod error;
-pub mod filter;
-pub mod frames;
-pub mod indicators;
-pub mod methods;
 pub mod metrics;
-pub mod model;
-pub mod rng;
 pub mod sim;
-pub mod thresholds;
 pub mod tight;
-pub mod track;
-pub mod snapshot;
 
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;

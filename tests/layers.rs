@@ -252,12 +252,18 @@ struct Graph {
 }
 
 fn graph() -> Graph {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    // The detector crate (`detector/src`, navguard-detector) holds most of
+    // the core; `src/lib.rs` re-exports its modules under their own names,
+    // so both trees are one module namespace. Its `lib.rs`, like ours, only
+    // declares and re-exports.
     let mut files = vec![];
-    walk(&root, &root, &mut files);
+    for dir in ["detector/src", "src"] {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+        walk(&root, &root, &mut files);
+    }
     let modules: BTreeSet<String> = files.iter().map(|f| f.0.clone()).collect();
     // lib.rs re-exports: `pub use a::{X, Y};` / `pub use a::X;` -> X => a.
-    let lib = files.iter().find(|f| f.0.is_empty()).map(|f| strip(&f.1)).unwrap_or_default();
+    let lib: String = files.iter().filter(|f| f.0.is_empty()).map(|f| strip(&f.1) + ";").collect();
     let mut alias: BTreeMap<String, String> = BTreeMap::new();
     for stmt in lib.split(';') {
         let Some(u) = stmt.trim().strip_prefix("pub use ") else { continue };

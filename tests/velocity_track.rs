@@ -1,4 +1,4 @@
-//! The GPS position against its own velocity track (src/track.rs): a jump
+//! The GPS position against its own velocity track (detector/src/track.rs): a jump
 //! that brings the position back onto its Doppler velocity integrated, from
 //! far off it, ends a position fault the filter had followed; it opens no
 //! new interval (issue 14, mechanism 1: "when the GPS returns to the truth,

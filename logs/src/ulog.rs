@@ -1439,7 +1439,7 @@ impl Parser {
                 (key, *n)
             })
             .collect();
-        topic_counts.sort();
+        crate::extras::sort_stable_by(&mut topic_counts, |a, b| a < b);
 
         let mut extras = std::mem::take(&mut self.extras);
         extras.sort();

@@ -1,8 +1,8 @@
 //! Regenerate the embedded default model, or train one from a labelled log.
 //!
-//! `cargo run --release --bin navguard-train` rewrites `src/default_model.json`
+//! `cargo run --release --bin navguard-train` rewrites `detector/src/default_model.json`
 //! from simulated flights (seeds 1000+, never the evaluation seeds), and
-//! `src/default_model.bin`, the binary form the crate embeds (postcard of
+//! `detector/src/default_model.bin`, the binary form the crate embeds (postcard of
 //! what the JSON parses to, see `navguard::model::EMBEDDED_MODEL`).
 //! `cargo run --release --bin navguard-train -- --from FILE.csv [--out model.json]`
 //! trains from your own labelled navlog CSV(s) (`label` column, 0/1).
@@ -52,7 +52,7 @@ fn battery() -> Vec<Scenario> {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut from = vec![];
-    let mut out = String::from("src/default_model.json");
+    let mut out = String::from("detector/src/default_model.json");
     let mut i = 0;
     while i < args.len() {
         match args[i].as_str() {

@@ -2,12 +2,13 @@
 //! readers (`readLog`) and `metrics`. Core module.
 
 use js_sys::{Float64Array, Object, Uint8Array};
-use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
-use super::detector::DetectorStats;
-use super::interop::{self as js_in, config_from, err, set, to_js, MAX_BYTES, MAX_VALUES};
+use super::detector::stats_object;
+use super::interop::{self as js_in, array_of, config_from, err, set, string_pairs, strings, Obj, MAX_BYTES, MAX_VALUES};
+use crate::logs::extras::EphSource;
 use crate::audit;
+use crate::detector::column_of_rows;
 use crate::logs;
 use crate::metrics;
 use crate::sample::COLUMNS;
@@ -38,11 +39,77 @@ export interface AuditResult { report: AuditReport; columns: { t: Float64Array; 
 export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][]; topicCounts: [string, number][] }
 "#;
 
-/// The report as JS sees it: its `stats` in the API's camelCase.
-fn report_object(report: &audit::Report) -> Result<JsValue, JsError> {
-    let o = to_js(report)?;
-    set(o.unchecked_ref(), "stats", &to_js(&DetectorStats::from(&report.stats))?);
-    Ok(o)
+/// One fault interval as JS sees it (`peakOffset` absent for an outage).
+fn interval_object(iv: &audit::FaultInterval) -> JsValue {
+    let mut o = Obj::new()
+        .n("start", iv.start)
+        .n("end", iv.end)
+        .s("kind", iv.kind)
+        .n("peakF", iv.peak_f)
+        .s("driver", iv.driver)
+        .s("indicator", iv.indicator)
+        .n("rows", iv.rows as f64);
+    if let Some(x) = iv.peak_offset {
+        o = o.n("peakOffset", x);
+    }
+    o.s("offsetUnit", iv.offset_unit).n("durationS", iv.duration_s).s("severity", iv.severity).done()
+}
+
+/// Metrics as JS sees them (camelCase).
+fn metrics_object(m: &metrics::Metrics) -> JsValue {
+    Obj::new()
+        .n("tp", m.tp as f64)
+        .n("fp", m.fp as f64)
+        .n("tn", m.tn as f64)
+        .n("fn", m.r#fn as f64)
+        .n("accuracy", m.accuracy)
+        .n("falseAlarmRate", m.false_alarm_rate)
+        .n("misdetectionRate", m.misdetection_rate)
+        .n("precision", m.precision)
+        .n("recall", m.recall)
+        .n("f2", m.f2)
+        .n("meanDetectionDelay", m.mean_detection_delay)
+        .n("faultIntervals", m.fault_intervals as f64)
+        .n("detectedIntervals", m.detected_intervals as f64)
+        .done()
+}
+
+/// The report as JS sees it (camelCase; `metrics` and `startUtc` absent
+/// when the log has no labels or no GPS time).
+fn report_object(r: &audit::Report) -> JsValue {
+    let gaps = array_of(&r.data_gaps, |g| Obj::new().n("start", g.start).n("end", g.end).done());
+    let mut o = Obj::new()
+        .s("format", r.format)
+        .n("rows", r.rows as f64)
+        .n("durationS", r.duration_s)
+        .n("gpsEpochs", r.gps_epochs as f64)
+        .n("gpsRateHz", r.gps_rate_hz)
+        .n("imuRateHz", r.imu_rate_hz)
+        .b("gpsAvailable", r.gps_available)
+        .n("gpsFixFraction", r.gps_fix_fraction)
+        .n("flaggedGpsEpochFraction", r.flagged_gps_epoch_fraction)
+        .v("faults", &array_of(&r.faults, interval_object))
+        .v("reconciled", &array_of(&r.reconciled, interval_object))
+        .v("dataGaps", &gaps)
+        .v("missing", &strings(&r.missing))
+        .v("warnings", &strings(&r.warnings))
+        .v("meta", &string_pairs(&r.meta));
+    if let Some(m) = &r.metrics {
+        o = o.v("metrics", &metrics_object(m));
+    }
+    o = o.v("stats", &stats_object(&r.stats)).n("startT", r.start_t);
+    if let Some(u) = &r.start_utc {
+        o = o.s("startUtc", u);
+    }
+    let eph = match r.eph_source {
+        EphSource::None => "none",
+        EphSource::Eph => "eph",
+        EphSource::Hdop => "hdop",
+    };
+    o.s("ephSource", eph)
+        .v("modes", &array_of(&r.modes, |m| Obj::new().n("t", m.t).s("mode", &m.mode).done()))
+        .v("messages", &array_of(&r.messages, |m| Obj::new().n("t", m.t).s("level", m.level).s("text", &m.text).done()))
+        .done()
 }
 
 fn columns_object(cols: &audit::Columns) -> JsValue {
@@ -61,7 +128,7 @@ fn columns_object(cols: &audit::Columns) -> JsValue {
 
 fn audit_result(report: &audit::Report, cols: &audit::Columns) -> Result<JsValue, JsError> {
     let out = Object::new();
-    set(&out, "report", &report_object(report)?);
+    set(&out, "report", &report_object(report));
     set(&out, "columns", &columns_object(cols));
     Ok(out.into())
 }
@@ -198,37 +265,28 @@ impl StreamAuditor {
     }
 }
 
-/// `readLog`'s result but its columns.
-#[derive(Serialize)]
-#[serde(rename_all = "camelCase")]
-struct LogInfo<'a, W: Serialize, M: Serialize, X: Serialize, T: Serialize> {
-    format: &'a str,
-    rows: usize,
-    warnings: &'a W,
-    missing: &'a M,
-    meta: &'a X,
-    topic_counts: &'a T,
-}
-
 /// Parse a log into columns (for plotting): `{ format, columns: {name: Float64Array}, warnings, missing, meta }`.
 #[wasm_bindgen(js_name = readLog, unchecked_return_type = "LogColumns")]
 pub fn read_log(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue) -> Result<JsValue, JsError> {
     let bytes = js_in::bytes(bytes, MAX_BYTES, "readLog: bytes").map_err(err)?;
     let log = logs::read_any(&bytes)?;
     let cols = Object::new();
-    let mut buf = vec![0.0; log.samples.len()];
+    let mut buf = Vec::new();
     for (i, name) in COLUMNS.iter().enumerate() {
-        if !log.samples.iter().any(|s| !s.get(i).is_nan()) {
-            continue;
+        if column_of_rows(&log.samples, i, &mut buf) {
+            set(&cols, name, &Float64Array::from(&buf[..]).into());
         }
-        for (j, s) in log.samples.iter().enumerate() {
-            buf[j] = s.get(i);
-        }
-        set(&cols, name, &Float64Array::from(&buf[..]).into());
     }
-    let out = to_js(&LogInfo { format: log.format, rows: log.samples.len(), warnings: &log.warnings, missing: &log.missing, meta: &log.meta, topic_counts: &log.topic_counts })?;
-    set(out.unchecked_ref(), "columns", &cols.into());
-    Ok(out)
+    let topics = array_of(&log.topic_counts, |(k, n)| js_sys::Array::of2(&JsValue::from_str(k), &JsValue::from_f64(*n as f64)).into());
+    Ok(Obj::new()
+        .s("format", log.format)
+        .n("rows", log.samples.len() as f64)
+        .v("warnings", &strings(&log.warnings))
+        .v("missing", &strings(&log.missing))
+        .v("meta", &string_pairs(&log.meta))
+        .v("topicCounts", &topics)
+        .v("columns", &cols.into())
+        .done())
 }
 
 /// Metrics over labelled rows (contract definitions).
@@ -246,6 +304,6 @@ pub fn metrics(
     if t.len() != label.len() || t.len() != status.len() {
         return Err(err(format!("metrics: lengths differ: t {}, label {}, status {}", t.len(), label.len(), status.len())));
     }
-    to_js(&metrics::compute(t, label, status))
+    Ok(metrics_object(&metrics::compute(t, label, status)))
 }
 

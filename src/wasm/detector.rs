@@ -2,11 +2,11 @@
 //! and the contract's column names. Core module.
 
 use js_sys::{Array, Object, Uint8Array};
-use serde::Serialize;
 use wasm_bindgen::prelude::*;
 
-use super::interop::{self as js_in, err, set, to_js, MAX_BYTES};
-use crate::detector::{Detector as CoreDetector, Output, Stats};
+use super::interop::{self as js_in, err, set, Obj, MAX_BYTES};
+use crate::config::Config;
+use crate::detector::{row_from_values, rows_from_columns, Detector as CoreDetector, Output, OutputColumns, Stats};
 use crate::sample::{Sample, COLUMNS};
 
 thread_local! {
@@ -28,50 +28,50 @@ fn output_row(o: &Output) -> [f64; 7] {
     [o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }]
 }
 
-/// One push result as JS sees it.
-#[derive(Serialize)]
-#[serde(rename_all = "camelCase")]
-struct PushResult {
-    t: f64,
-    status: u8,
-    f: f64,
-    r: f64,
-    c: f64,
-    kind: u8,
-    gps_epoch: bool,
-}
-
+/// One push result as JS sees it: `{ t, status, f, r, c, kind, gpsEpoch }`.
 fn output_object(o: &Output) -> Result<JsValue, JsError> {
-    to_js(&PushResult { t: o.t, status: o.status, f: o.f, r: o.r, c: o.c, kind: o.kind, gps_epoch: o.gps_epoch })
+    Ok(Obj::new().n("t", o.t).n("status", o.status as f64).n("f", o.f).n("r", o.r).n("c", o.c).n("kind", o.kind as f64).b("gpsEpoch", o.gps_epoch).done())
 }
 
 /// The detector's counters as JS sees them (camelCase, like the rest of the API).
-#[derive(Serialize)]
-#[serde(rename_all = "camelCase")]
-pub(super) struct DetectorStats {
-    rows: u64,
-    gps_epochs: u64,
-    imu_rows: u64,
-    baro_rows: u64,
-    retrains: u64,
-    filter_resets: u64,
-    data_gaps: u64,
-    filter_errors: u64,
+pub(super) fn stats_object(s: &Stats) -> JsValue {
+    Obj::new()
+        .n("rows", s.rows as f64)
+        .n("gpsEpochs", s.gps_epochs as f64)
+        .n("imuRows", s.imu_rows as f64)
+        .n("baroRows", s.baro_rows as f64)
+        .n("retrains", s.retrains as f64)
+        .n("filterResets", s.filter_resets as f64)
+        .n("dataGaps", s.data_gaps as f64)
+        .n("filterErrors", s.filter_errors as f64)
+        .done()
 }
 
-impl From<&Stats> for DetectorStats {
-    fn from(s: &Stats) -> Self {
-        DetectorStats {
-            rows: s.rows,
-            gps_epochs: s.gps_epochs,
-            imu_rows: s.imu_rows,
-            baro_rows: s.baro_rows,
-            retrains: s.retrains,
-            filter_resets: s.filter_resets,
-            data_gaps: s.data_gaps,
-            filter_errors: s.filter_errors,
-        }
-    }
+/// The checked config as JS sees it: the fields of `Config` as they are
+/// named in Rust (snake_case, as the API has always returned them), the
+/// model left out.
+fn config_object(c: &Config) -> JsValue {
+    let n = &c.noise;
+    let noise = Obj::new()
+        .n("gps_pos_sigma", n.gps_pos_sigma)
+        .n("gps_alt_sigma", n.gps_alt_sigma)
+        .n("gps_vel_sigma", n.gps_vel_sigma)
+        .n("baro_sigma", n.baro_sigma)
+        .n("accel_noise", n.accel_noise)
+        .n("cv_accel_noise", n.cv_accel_noise)
+        .done();
+    Obj::new()
+        .s("method", c.method.name())
+        .n("tc", c.tc as f64)
+        .n("q", c.q as f64)
+        .n("window", c.window as f64)
+        .n("threshold", c.threshold)
+        .b("retrain", c.retrain)
+        .v("noise", &noise)
+        .opt("outage_timeout", c.outage_timeout)
+        .n("max_coast", c.max_coast)
+        .n("data_gap", c.data_gap)
+        .done()
 }
 
 #[wasm_bindgen(typescript_custom_section)]
@@ -149,16 +149,6 @@ pub struct Detector {
 /// `Detector::io`: the row's 27 columns, then `[t, status, f, r, c, kind, gpsEpoch]`.
 const IO_LEN: usize = COLUMNS.len() + 7;
 
-/// One chunk of `pushColumns` results, then copied into the JS arrays.
-#[derive(Default)]
-struct ChunkOut {
-    status: Vec<u8>,
-    kind: Vec<u8>,
-    f: Vec<f64>,
-    r: Vec<f64>,
-    c: Vec<f64>,
-}
-
 #[wasm_bindgen]
 impl Detector {
     fn wrap(inner: CoreDetector) -> Detector {
@@ -205,11 +195,7 @@ impl Detector {
         if self.row.len() != COLUMNS.len() {
             return Err(err(format!("{what}: expected {} values, got {}", COLUMNS.len(), self.row.len())));
         }
-        let mut s = Sample::default();
-        for (i, v) in self.row.iter().enumerate() {
-            s.set(i, *v);
-        }
-        Ok(s)
+        Ok(row_from_values(&self.row))
     }
 
     /// Push one row given as the 27 columns in `COLUMNS` order
@@ -254,16 +240,7 @@ impl Detector {
     /// an API (the package's `push` is). Touches no JS value.
     #[wasm_bindgen(js_name = __pushIo)]
     pub fn push_io(&mut self) -> Result<(), JsError> {
-        let mut s = Sample::default();
-        for (i, v) in self.io.iter().take(COLUMNS.len()).enumerate() {
-            s.set(i, *v);
-        }
-        let o = self.inner.push(&s).map_err(err)?;
-        let vals = output_row(&o);
-        for (d, v) in self.io.iter_mut().skip(COLUMNS.len()).zip(vals) {
-            *d = v;
-        }
-        Ok(())
+        self.inner.push_values(&mut self.io[..]).map_err(err)
     }
 
     /// Rows accepted so far (the next row's index in error messages).
@@ -288,37 +265,28 @@ impl Detector {
         let chunks: Vec<(usize, usize)> = (0..n).step_by(CHUNK_ROWS).map(|a| (a, (a + CHUNK_ROWS).min(n))).collect();
         for &(a, b) in &chunks {
             self.load_chunk(&src, a, b)?;
-            for (k, s) in self.rows.iter().enumerate() {
+            if let Err((k, e)) = self.inner.validate_batch(&self.rows, base + a as u64, &mut last_t) {
                 let j = a + k;
-                self.inner.validate(s, base + j as u64).map_err(|e| err(format!("{e} (batch index {j})")))?;
-                if s.t < last_t {
-                    return Err(err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, s.t, last_t)));
-                }
-                last_t = s.t;
+                return Err(match e {
+                    Some(e) => err(format!("{e} (batch index {j})")),
+                    None => {
+                        let t = self.rows.get(k).map_or(f64::NAN, |s| s.t);
+                        err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, t, last_t))
+                    }
+                });
             }
         }
         let (u8c, f64c) = (js_in::u8_ctor(), js_in::f64_ctor());
         let new = |c: &JsValue| js_in::new_typed(c, n, "pushColumns: result").map_err(err);
         let (status, f, r, c, kind) = (new(&u8c)?, new(&f64c)?, new(&f64c)?, new(&f64c)?, new(&u8c)?);
         // Pass 2: push. A single chunk is still loaded from pass 1.
-        let mut o = ChunkOut::default();
+        let mut o = OutputColumns::default();
         for &(a, b) in &chunks {
             if chunks.len() > 1 {
                 self.load_chunk(&src, a, b)?;
             }
-            o.status.clear();
-            o.kind.clear();
-            o.f.clear();
-            o.r.clear();
-            o.c.clear();
-            for s in &self.rows {
-                let out = self.inner.push_valid(s);
-                o.status.push(out.status);
-                o.kind.push(out.kind);
-                o.f.push(out.f);
-                o.r.push(out.r);
-                o.c.push(out.c);
-            }
+            o.clear();
+            self.inner.push_valid_batch(&self.rows, &mut o);
             // Our own fresh arrays, sized n: these writes cannot fail.
             let w = "pushColumns: result";
             js_in::write_u8(&status, a, &o.status, w).map_err(err)?;
@@ -341,28 +309,25 @@ impl Detector {
         for (i, (s, buf)) in src.iter().zip(self.cols.iter_mut()).enumerate() {
             match s {
                 Some(s) => s.read(a, b, buf, &format!("pushColumns: column '{}'", COLUMNS.get(i).copied().unwrap_or("?"))).map_err(err)?,
-                None => {
-                    buf.clear();
-                    buf.resize(b - a, f64::NAN);
-                }
+                // An empty column reads as NaN (absent) in `rows_from_columns`.
+                None => buf.clear(),
             }
         }
         let c: [&[f64]; COLUMNS.len()] = core::array::from_fn(|i| self.cols.get(i).map_or(&[][..], |v| &v[..]));
-        self.rows.clear();
-        self.rows.extend((0..b - a).map(|j| Sample::from_columns(&c, j)));
+        rows_from_columns(&c, b - a, &mut self.rows);
         Ok(())
     }
 
     /// Counters: rows, GPS epochs, retrains, resets, data gaps.
     #[wasm_bindgen(unchecked_return_type = "DetectorStats")]
     pub fn stats(&self) -> Result<JsValue, JsError> {
-        to_js(&DetectorStats::from(&self.inner.stats()))
+        Ok(stats_object(&self.inner.stats()))
     }
 
     /// The checked configuration in use.
     #[wasm_bindgen(unchecked_return_type = "object")]
     pub fn config(&self) -> Result<JsValue, JsError> {
-        to_js(self.inner.config())
+        Ok(config_object(self.inner.config()))
     }
 
     /// The whole detector state (filter, windows, D1/D2, ANFIS, counters,
@@ -422,7 +387,8 @@ fn column_sources(columns: &JsValue) -> Result<(Vec<Option<js_in::F64Source>>, u
 #[wasm_bindgen(js_name = snapshotInfo, unchecked_return_type = "SnapshotInfo")]
 pub fn snapshot_info(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] snapshot: &JsValue) -> Result<JsValue, JsError> {
     let bytes = js_in::bytes(snapshot, MAX_BYTES, "snapshotInfo: snapshot").map_err(err)?;
-    to_js(&crate::snapshot::info(&bytes).map_err(err)?)
+    let i = crate::snapshot::info(&bytes).map_err(err)?;
+    Ok(Obj::new().n("version", i.version as f64).s("crateVersion", &i.crate_version).n("bytes", i.bytes as f64).done())
 }
 
 /// The wasm memory, for the package's `push` fast path; not an API.

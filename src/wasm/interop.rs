@@ -191,11 +191,24 @@ fn unreadable(what: &str, e: &JsValue) -> String {
     format!("{what}: unreadable (detached buffer?): {}", describe(e))
 }
 
+/// Element types whose all-zero bytes are a value (0, 0.0).
+trait Zeroable: Copy {}
+impl Zeroable for u8 {}
+impl Zeroable for f64 {}
+
 /// Copy the whole typed array `src` (of `n` elements, as checked) into `dst`.
-fn copy_all<E: Copy + Default>(src: &JsValue, n: usize, dst: &mut Vec<E>, view: unsafe fn(*mut E, usize) -> JsValue, what: &str) -> Result<(), String> {
+fn copy_all<E: Zeroable>(src: &JsValue, n: usize, dst: &mut Vec<E>, view: unsafe fn(*mut E, usize) -> JsValue, what: &str) -> Result<(), String> {
     dst.clear();
     dst.try_reserve_exact(n).map_err(|_| format!("{what}: cannot allocate {n} elements"))?;
-    dst.resize(n, E::default());
+    // Zeroed in one `memory.fill` (this crate is built for size in the core
+    // module, where `resize` would be a loop over the elements, megabytes
+    // of a log).
+    // SAFETY: `n` elements were reserved, and all-zero bytes are a value of
+    // `E` (`Zeroable`).
+    unsafe {
+        core::ptr::write_bytes(dst.as_mut_ptr(), 0, n);
+        dst.set_len(n);
+    }
     // SAFETY: the view covers `dst`'s n initialised elements and is used at
     // once, before anything can allocate in wasm memory.
     let v = unsafe { view(dst.as_mut_ptr(), n) };
@@ -439,4 +452,63 @@ pub fn to_js<T: Serialize + ?Sized>(x: &T) -> Result<JsValue, JsError> {
 /// `o[k] = v` on a fresh plain object of ours (cannot fail).
 pub fn set(o: &Object, k: &str, v: &JsValue) {
     let _ = Reflect::set(o, &JsValue::from_str(k), v);
+}
+
+/// A result as a plain JS object, built field by field: what [`to_js`]
+/// gives for a struct (its fields in declaration order, `None` as a field
+/// holding `undefined`, integers as numbers), without serde's code in the
+/// core module. The core module's results are built with it; the lab's
+/// still go through [`to_js`].
+pub struct Obj(Object);
+
+impl Obj {
+    /// An empty plain object.
+    pub fn new() -> Obj {
+        Obj(Object::new())
+    }
+    /// `k`: any JS value.
+    pub fn v(self, k: &str, v: &JsValue) -> Obj {
+        set(&self.0, k, v);
+        self
+    }
+    /// `k`: a number (an integer counter as serde-wasm-bindgen writes it, as
+    /// an f64).
+    pub fn n(self, k: &str, v: f64) -> Obj {
+        self.v(k, &JsValue::from_f64(v))
+    }
+    /// `k`: a number, or `undefined` for `None` (the field is still there).
+    pub fn opt(self, k: &str, v: Option<f64>) -> Obj {
+        self.v(k, &v.map_or(JsValue::UNDEFINED, JsValue::from_f64))
+    }
+    /// `k`: a boolean.
+    pub fn b(self, k: &str, v: bool) -> Obj {
+        self.v(k, &JsValue::from_bool(v))
+    }
+    /// `k`: a string.
+    pub fn s(self, k: &str, v: &str) -> Obj {
+        self.v(k, &JsValue::from_str(v))
+    }
+    /// The object.
+    pub fn done(self) -> JsValue {
+        self.0.into()
+    }
+}
+
+/// A JS array of the values `f` makes of `items`.
+pub fn array_of<T>(items: &[T], f: impl Fn(&T) -> JsValue) -> JsValue {
+    let a = Array::new();
+    for x in items {
+        a.push(&f(x));
+    }
+    a.into()
+}
+
+/// Strings as a JS array of strings.
+pub fn strings(items: &[String]) -> JsValue {
+    array_of(items, |s| JsValue::from_str(s))
+}
+
+/// `(key, value)` pairs as a JS array of two-element arrays.
+pub fn string_pairs(items: &[(String, String)]) -> JsValue {
+    array_of(items, |(k, v)| Array::of2(&JsValue::from_str(k), &JsValue::from_str(v)).into())
 }

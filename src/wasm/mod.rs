@@ -4,8 +4,10 @@
 //! `.ci/build`. [`interop`] holds every JS <-> Rust conversion both share.
 //! Everything `#[wasm_bindgen]` lives here; the core never sees a JS type.
 //!
-//! Results are plain JS objects (from `#[derive(Serialize)]` structs, one
-//! naming rule: camelCase) and typed arrays (no class handles to free in
+//! Results are plain JS objects (one naming rule: camelCase; the core
+//! module's built field by field with `interop::Obj`, so it carries no
+//! serde serializer; the lab's from `#[derive(Serialize)]` structs through
+//! serde-wasm-bindgen) and typed arrays (no class handles to free in
 //! loops). Errors are JS `Error`s naming the row and field; an object is
 //! untouched by a rejected row or batch. Each file carries the TypeScript
 //! declarations of what it exports (`typescript_custom_section`).

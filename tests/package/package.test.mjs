@@ -25,11 +25,15 @@ const CORE_WASM = statSync(join(pkg, 'navguard_core_bg.wasm')).size;
 const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // Issue 15 asks for <= 300 KB. With the threshold pools and the model
 // embedded (no simulator, no JSON parser in the core), snapshots and the
-// config read by hand-written code (no serde deserializer), and the log
-// readers built for size, it is 466 KB: the row path at opt-level 3, the
-// readers, audits and the facade make up the rest (README, Speed and
+// config read by hand-written code (no serde deserializer), the log
+// readers built for size, the detector in a crate of its own at opt-level
+// 3 while the facade, audits, snapshot and restore are built for size,
+// results built as JS objects by hand (no serde-wasm-bindgen) and the
+// readers' few sorts through one merge sort and the threshold pools
+// embedded packed (LZ77, codec::unpack), it is 411 KB: the row path,
+// the readers, audits and the facade make up the rest (README, Speed and
 // size). Lower this as the core shrinks (about 1% over the measured size).
-const CORE_WASM_BUDGET = 470_500;
+const CORE_WASM_BUDGET = 415_400;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;

@@ -100,6 +100,72 @@ pub struct Output {
     pub driver: u8,
 }
 
+/// A batch's outputs as columns (see [`Detector::push_valid_batch`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OutputColumns {
+    /// [`Output::status`] per row.
+    pub status: Vec<u8>,
+    /// [`Output::kind`] per row.
+    pub kind: Vec<u8>,
+    /// [`Output::f`] per row.
+    pub f: Vec<f64>,
+    /// [`Output::r`] per row.
+    pub r: Vec<f64>,
+    /// [`Output::c`] per row.
+    pub c: Vec<f64>,
+}
+
+impl OutputColumns {
+    /// Empty every column (keeping their capacity).
+    pub fn clear(&mut self) {
+        self.status.clear();
+        self.kind.clear();
+        self.f.clear();
+        self.r.clear();
+        self.c.clear();
+    }
+}
+
+/// Rows `0..n` of columns in [`COLUMNS`](crate::sample::COLUMNS) order
+/// (a short column reads as NaN) into `rows`, replacing its contents; and
+/// one row from values in that order. Here, not in the wasm facade that
+/// uses them, so they run at the row path's opt-level.
+#[inline(never)] // see `Detector::validate`
+pub fn rows_from_columns(cols: &[&[f64]; crate::sample::COLUMNS.len()], n: usize, rows: &mut Vec<Sample>) {
+    rows.clear();
+    rows.extend((0..n).map(|j| Sample::from_columns(cols, j)));
+}
+
+/// Column `i` (in [`COLUMNS`](crate::sample::COLUMNS) order) of `rows` into
+/// `out`, replacing its contents; false (and `out` untouched) when every
+/// value in it is NaN (absent). For `readLog`'s columns, here for the same
+/// reason as [`rows_from_columns`].
+#[inline(never)]
+pub fn column_of_rows(rows: &[Sample], i: usize, out: &mut Vec<f64>) -> bool {
+    if !rows.iter().any(|s| !s.get(i).is_nan()) {
+        return false;
+    }
+    out.clear();
+    out.extend(rows.iter().map(|s| s.get(i)));
+    true
+}
+
+/// One row from its values in [`COLUMNS`](crate::sample::COLUMNS) order
+/// (see [`rows_from_columns`]; missing values read as NaN).
+#[inline(never)] // see `Detector::validate`
+pub fn row_from_values(values: &[f64]) -> Sample {
+    row_of(values)
+}
+
+#[inline]
+fn row_of(values: &[f64]) -> Sample {
+    let mut s = Sample::default();
+    for (i, v) in values.iter().take(crate::sample::COLUMNS.len()).enumerate() {
+        s.set(i, *v);
+    }
+    s
+}
+
 /// Bad input: names the row and the field.
 #[derive(Clone, Debug, PartialEq)]
 pub struct InputError {
@@ -1632,6 +1698,7 @@ impl Learning {
 
 impl Detector {
     /// Detector with the config's model, or the embedded default.
+    #[inline]
     pub fn new(cfg: Config) -> Result<Self, String> {
         let model = match &cfg.model {
             Some(m) => m.clone(),
@@ -1647,6 +1714,7 @@ impl Detector {
     }
 
     /// Detector with an explicit model (the config's `model` field is ignored).
+    #[inline]
     pub fn with_model(cfg: Config, model: &Model) -> Self {
         Detector {
             kf: None,
@@ -1674,6 +1742,7 @@ impl Detector {
     /// shape against a fresh detector of that config (so a corrupt or forged
     /// snapshot is an error, not an index panic later), and restore the
     /// scratch buffers that snapshots do not carry.
+    #[inline]
     pub(crate) fn check_restored(&mut self) -> Result<(), String> {
         let checked = self.cfg.to_input().check()?;
         if checked != self.cfg {
@@ -1777,7 +1846,34 @@ impl Detector {
     }
 
     /// Check a row without touching state. `row` is used for the message.
+    // Not inlined into a caller of another crate: the core wasm module
+    // builds the facade that calls it for size, and inlined code takes the
+    // caller's opt-level (the range check is then not vectorised).
+    #[inline(never)]
     pub fn validate(&self, s: &Sample, row: u64) -> Result<(), InputError> {
+        self.check_row(s, row)
+    }
+
+    /// [`Detector::validate`] over a batch (row numbers from `first_row`),
+    /// and the batch's own time order from `*last_t` on (updated to the
+    /// last good row's time): the first bad row's index in `rows`, with its
+    /// error, or `None` when its time goes back from the row before it
+    /// (`*last_t`). The wasm facade's first pass over a batch; here so that
+    /// it runs at the row path's opt-level (see `validate`).
+    #[inline(never)]
+    pub fn validate_batch(&self, rows: &[Sample], first_row: u64, last_t: &mut f64) -> Result<(), (usize, Option<InputError>)> {
+        for (k, s) in rows.iter().enumerate() {
+            self.check_row(s, first_row + k as u64).map_err(|e| (k, Some(e)))?;
+            if s.t < *last_t {
+                return Err((k, None));
+            }
+            *last_t = s.t;
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn check_row(&self, s: &Sample, row: u64) -> Result<(), InputError> {
         validate_sample(s, row)?;
         if let Some(lt) = self.clock.last_t {
             if s.t < lt {
@@ -1792,8 +1888,9 @@ impl Detector {
     }
 
     /// Process one row. On `Err` nothing changed.
+    #[inline(never)] // see `validate`
     pub fn push(&mut self, s: &Sample) -> Result<Output, InputError> {
-        self.validate(s, self.stats.rows)?;
+        self.check_row(s, self.stats.rows)?;
         Ok(self.push_valid(s))
     }
 
@@ -1801,6 +1898,7 @@ impl Detector {
     /// the filter to the row's time with the IMU held from an earlier row,
     /// hold this row's IMU, feed its baro, then judge its fix (or its lack
     /// of one).
+    #[inline(never)] // see `validate`
     pub fn push_valid(&mut self, s: &Sample) -> Output {
         self.stats.rows += 1;
         self.resid = [f64::NAN; 7];
@@ -1834,6 +1932,40 @@ impl Detector {
             out.kind = kind::DEGRADED;
         }
         out
+    }
+
+    /// [`Detector::push`] of a row given as values in
+    /// [`COLUMNS`](crate::sample::COLUMNS) order (NaN = absent), its output
+    /// written after them as `[t, status, f, r, c, kind, gps_epoch]` (the
+    /// wasm package's row buffer: `io` holds at least `COLUMNS.len() + 7`
+    /// values). On `Err` nothing changed, `io` included.
+    #[inline(never)] // see `validate`
+    pub fn push_values(&mut self, io: &mut [f64]) -> Result<(), InputError> {
+        let n = crate::sample::COLUMNS.len();
+        let s = row_of(io);
+        self.check_row(&s, self.stats.rows)?;
+        let o = self.push_valid(&s);
+        let vals = [o.t, o.status as f64, o.f, o.r, o.c, o.kind as f64, if o.gps_epoch { 1.0 } else { 0.0 }];
+        for (d, v) in io.iter_mut().skip(n).zip(vals) {
+            *d = v;
+        }
+        Ok(())
+    }
+
+    /// [`Detector::push_valid`] over a batch of rows already validated,
+    /// their outputs appended to `out`. The wasm facade's batch loop lives
+    /// here, in the row path's crate, so it runs at the detector's
+    /// opt-level (the facade is built for size).
+    #[inline(never)] // see `validate`
+    pub fn push_valid_batch(&mut self, rows: &[Sample], out: &mut OutputColumns) {
+        for s in rows {
+            let o = self.push_valid(s);
+            out.status.push(o.status);
+            out.kind.push(o.kind);
+            out.f.push(o.f);
+            out.r.push(o.r);
+            out.c.push(o.c);
+        }
     }
 
     /// Every sensor stopped: a logging gap, not a navigation fault. No

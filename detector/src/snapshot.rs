@@ -79,10 +79,12 @@ pub struct Info {
     pub bytes: usize,
 }
 
+#[inline]
 fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
+#[inline]
 fn header(bytes: &[u8]) -> Result<(Header, &[u8]), SnapshotError> {
     let mut r = Reader::new(bytes);
     let h = Header::decode(&mut r);
@@ -106,6 +108,7 @@ fn header(bytes: &[u8]) -> Result<(Header, &[u8]), SnapshotError> {
 }
 
 /// Read a snapshot's header (and verify its checksum) without restoring it.
+#[inline]
 pub fn info(bytes: &[u8]) -> Result<Info, SnapshotError> {
     let (h, _) = header(bytes)?;
     Ok(Info { version: h.version, crate_version: h.crate_version, bytes: bytes.len() })
@@ -113,6 +116,7 @@ pub fn info(bytes: &[u8]) -> Result<Info, SnapshotError> {
 
 impl Detector {
     /// The detector's whole state as bytes (see the module docs).
+    #[inline]
     pub fn snapshot(&self) -> Result<Vec<u8>, SnapshotError> {
         let body = codec::to_bytes(self);
         let h = Header {
@@ -128,6 +132,7 @@ impl Detector {
 
     /// A detector resumed from [`Detector::snapshot`] bytes: it continues
     /// exactly where the snapshotted one stood.
+    #[inline]
     pub fn restore(bytes: &[u8]) -> Result<Detector, SnapshotError> {
         let (_, body) = header(bytes)?;
         let mut r = Reader::new(body);
@@ -147,10 +152,10 @@ mod tests {
     use super::*;
     use crate::config::Config;
     use crate::detector::Output;
-    use crate::sim;
+    use navguard::sim;
     use proptest::prelude::*;
 
-    fn run(det: &mut Detector, rows: &[crate::Sample]) -> Vec<Output> {
+    fn run(det: &mut Detector, rows: &[crate::sample::Sample]) -> Vec<Output> {
         rows.iter().map(|s| det.push(s).expect("simulated rows are valid")).collect()
     }
 
@@ -168,7 +173,7 @@ mod tests {
         Ok(())
     }
 
-    fn scenario() -> Vec<crate::Sample> {
+    fn scenario() -> Vec<crate::sample::Sample> {
         sim::simulate(&sim::Scenario::preset("paper", 3).unwrap()).unwrap()
     }
 

@@ -192,6 +192,90 @@ pub fn from_bytes<T: Codec>(bytes: &[u8]) -> Result<T, CodecError> {
     r.finish().map(|()| v)
 }
 
+/// Largest output of [`unpack`]: far above the embedded data's size, so a
+/// damaged input cannot make it allocate without bound.
+const MAX_UNPACKED: usize = 1 << 24;
+
+/// Bytes packed by [`pack`], unpacked: literal runs and back-references
+/// (LZ77), each a varint length then the bytes, or a varint length and a
+/// varint distance back into what is unpacked so far (the copy may overlap
+/// itself). The embedded threshold pools ship packed: 21 KB of postcard
+/// bytes, a third of it zeros and repeats, in 8 KB of the core wasm module.
+/// Never panics: bad input is an error.
+pub fn unpack(packed: &[u8]) -> Result<Vec<u8>, CodecError> {
+    let mut r = Reader::new(packed);
+    let mut out: Vec<u8> = Vec::new();
+    while r.error.is_none() && !r.rest().is_empty() {
+        // `len` checked that the literals are there.
+        let n = r.len();
+        let lit = r.rest().get(..n).unwrap_or(&[]);
+        if lit.len() > MAX_UNPACKED - out.len() {
+            r.fail("unpacked data too long");
+            break;
+        }
+        out.extend_from_slice(lit);
+        r.pos += lit.len();
+        if r.rest().is_empty() {
+            break;
+        }
+        let m = usize::decode(&mut r);
+        let d = usize::decode(&mut r);
+        if r.error.is_some() {
+            break;
+        }
+        if d == 0 || d > out.len() || m > MAX_UNPACKED - out.len() {
+            r.fail(&format!("back-reference {m} bytes from {d} back does not fit"));
+            break;
+        }
+        let start = out.len() - d;
+        for k in start..start + m {
+            let b = out.get(k).copied().unwrap_or(0);
+            out.push(b);
+        }
+    }
+    r.finish().map(|()| out)
+}
+
+/// `bytes` packed for [`unpack`] (greedy LZ77 over 3-byte hash chains):
+/// how the embedded pools were packed. Not needed to read them.
+pub fn pack(bytes: &[u8]) -> Vec<u8> {
+    use std::collections::HashMap;
+    const MIN: usize = 4;
+    let n = bytes.len();
+    let mut w = Vec::new();
+    let mut chains: HashMap<&[u8], Vec<usize>> = HashMap::new();
+    let (mut i, mut lit) = (0, 0);
+    while i < n {
+        let key = bytes.get(i..i + 3);
+        let mut best = (0, 0);
+        if let Some(c) = key.and_then(|k| chains.get(k)) {
+            for &j in c.iter().rev().take(64) {
+                let l = bytes[i..].iter().zip(&bytes[j..]).take_while(|(a, b)| a == b).count();
+                if l > best.0 {
+                    best = (l, i - j);
+                }
+            }
+        }
+        let step = if best.0 >= MIN { best.0 } else { 1 };
+        if best.0 >= MIN {
+            (i - lit).encode(&mut w);
+            w.extend_from_slice(&bytes[lit..i]);
+            best.0.encode(&mut w);
+            best.1.encode(&mut w);
+            lit = i + step;
+        }
+        for k in i..i + step {
+            if let Some(key) = bytes.get(k..k + 3) {
+                chains.entry(key).or_default().push(k);
+            }
+        }
+        i += step;
+    }
+    (n - lit).encode(&mut w);
+    w.extend_from_slice(&bytes[lit..]);
+    w
+}
+
 impl Codec for f64 {
     fn encode(&self, w: &mut Vec<u8>) {
         put_f64(w, *self);
@@ -370,15 +454,17 @@ impl Codec for UnitQuaternion<f64> {
 macro_rules! impl_codec {
     ($name:ident $(<const $g:ident: usize>)? { $($field:ident),* $(,)? } $(skip { $($skip:ident),* $(,)? })?) => {
         impl$(<const $g: usize>)? $crate::codec::Codec for $name$(<$g>)? {
-            // One function per struct (not inlined into its parent's): the
-            // codec is cold code, kept small.
-            #[inline(never)]
+            // `#[inline]`: compiled in the crate that snapshots and
+            // restores (the core wasm module builds that one for size; this
+            // crate is built for speed), and inlined only where that is
+            // smaller. The codec is cold code.
+            #[inline]
             #[allow(non_snake_case)] // the filter's `P`
             fn encode(&self, w: &mut Vec<u8>) {
                 let $name { $($field,)* $($($skip: _,)*)? } = self;
                 $($crate::codec::Codec::encode($field, w);)*
             }
-            #[inline(never)]
+            #[inline]
             fn decode(r: &mut $crate::codec::Reader<'_>) -> Self {
                 // Struct literal fields are evaluated in the order written.
                 $name {
@@ -397,10 +483,12 @@ macro_rules! impl_codec {
 macro_rules! impl_codec_enum {
     ($name:ident { $first:ident = $i0:literal $(, $variant:ident = $i:literal)* $(,)? }) => {
         impl $crate::codec::Codec for $name {
+            #[inline] // see `impl_codec`
             fn encode(&self, w: &mut Vec<u8>) {
                 let i: u32 = match self { $name::$first => $i0, $($name::$variant => $i,)* };
                 $crate::codec::Codec::encode(&i, w);
             }
+            #[inline] // see `impl_codec`
             fn decode(r: &mut $crate::codec::Reader<'_>) -> Self {
                 match r.variant() {
                     $i0 => $name::$first,
@@ -423,6 +511,25 @@ mod tests {
     use proptest::prelude::*;
 
     /// `v`'s bytes must be postcard's, and read back to the same bits.
+    #[test]
+    fn pack_and_unpack_round_trip() {
+        let mut x: u64 = 1;
+        let mut cases: Vec<Vec<u8>> = vec![vec![], vec![7], vec![0; 100], b"abcabcabcabcx".to_vec(), crate::methods::EMBEDDED_POOLS.to_vec()];
+        for n in [1usize, 5, 64, 1000, 5000] {
+            cases.push((0..n).map(|_| { x ^= x << 13; x ^= x >> 7; x ^= x << 17; (x % 5) as u8 }).collect());
+        }
+        for c in &cases {
+            assert_eq!(&unpack(&pack(c)).unwrap(), c);
+        }
+    }
+
+    #[test]
+    fn bad_packed_bytes_are_an_error_not_a_panic() {
+        for bad in [&[1u8][..], &[0, 5, 1], &[1, 9, 5, 2], &[0, 255, 255, 255, 255, 255, 255, 255, 255, 255, 1, 1]] {
+            assert!(unpack(bad).is_err(), "{bad:?}");
+        }
+    }
+
     fn same_as_postcard<T: Codec + serde::Serialize + core::fmt::Debug>(v: &T) {
         let ours = to_bytes(v);
         assert_eq!(ours, postcard::to_allocvec(v).unwrap(), "{v:?}");

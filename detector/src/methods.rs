@@ -363,11 +363,18 @@ impl PoolState {
 }
 
 /// The pools of `rms`, `knee` and `adaptive` (in that order), as shipped in
-/// `src/default_pools.bin` ([`crate::codec`] bytes, postcard's, so every
+/// `detector/src/default_pools.bin` ([`crate::codec`] bytes, postcard's, so every
 /// f64 is bit-exact). They were
-/// fitted on clean simulated flights by [`crate::calibrate::fit_pools`] over
+/// fitted on clean simulated flights by `navguard::calibrate::fit_pools` (the lab) over
 /// seeds [`POOL_SEEDS`]; a test refits them and compares the bytes.
 pub const EMBEDDED_POOLS: &[u8] = include_bytes!("default_pools.bin");
+
+/// What the crate embeds and reads: [`EMBEDDED_POOLS`] packed by
+/// [`crate::codec::pack`] (8 KB instead of 21 KB in the core wasm module),
+/// unpacked at first use. A test holds it to `default_pools.bin`, byte for
+/// byte; `NAVGUARD_WRITE_POOLS=1 cargo test --release -p navguard-detector
+/// --lib packed_pools` rewrites it from that file.
+pub const EMBEDDED_POOLS_PACKED: &[u8] = include_bytes!("default_pools.lz");
 
 /// The simulator seeds the embedded pools were fitted on.
 pub const POOL_SEEDS: core::ops::Range<u64> = 1000..1006;
@@ -375,6 +382,7 @@ pub const POOL_SEEDS: core::ops::Range<u64> = 1000..1006;
 /// The pool for `method` (rms, knee or adaptive): the embedded pools, decoded
 /// once per process and cloned. Speed bands split the training epochs into
 /// quartiles.
+#[inline]
 pub fn default_pool(method: Method) -> Result<PoolState, String> {
     use std::sync::OnceLock;
     static POOLS: OnceLock<Result<[PoolState; 3], String>> = OnceLock::new();
@@ -385,7 +393,11 @@ pub fn default_pool(method: Method) -> Result<PoolState, String> {
         m => return Err(format!("method \"{}\" has no threshold pool", m.name())),
     };
     let pools = POOLS
-        .get_or_init(|| crate::codec::from_bytes(EMBEDDED_POOLS).map_err(|e| format!("embedded threshold pools: {e}")))
+        .get_or_init(|| {
+            crate::codec::unpack(EMBEDDED_POOLS_PACKED)
+                .and_then(|b| crate::codec::from_bytes(&b))
+                .map_err(|e| format!("embedded threshold pools: {e}"))
+        })
         .as_ref()
         .map_err(|e| e.clone())?;
     Ok(pools[k].clone())
@@ -393,6 +405,14 @@ pub fn default_pool(method: Method) -> Result<PoolState, String> {
 
 #[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
+    /// The packed pools unpack to `default_pools.bin` exactly.
+    #[test]
+    fn packed_pools_are_the_bin_exactly() {
+        if std::env::var_os("NAVGUARD_WRITE_POOLS").is_some() {
+            std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/src/default_pools.lz"), crate::codec::pack(super::EMBEDDED_POOLS)).unwrap();
+        }
+        assert!(crate::codec::unpack(super::EMBEDDED_POOLS_PACKED).unwrap() == super::EMBEDDED_POOLS, "default_pools.lz does not unpack to default_pools.bin");
+    }
     use super::*;
     use approx::assert_relative_eq;
 

@@ -789,6 +789,7 @@ const IMU_TAU: f64 = 20.0;
 
 impl IndicatorEngine {
     /// An engine with the given window lengths and learning rates.
+    #[inline]
     pub fn new(set: IndicatorSettings) -> Self {
         let w = set.window.max(1);
         let ws = w.div_ceil(4).max(1);

@@ -3,7 +3,7 @@
 //! them without importing each other. Each domain's own error sits with its
 //! domain: [`crate::detector::InputError`] (a bad row),
 //! [`crate::filter::FilterError`] (the filter refused an update),
-//! [`crate::snapshot::SnapshotError`] and [`crate::tight::TightError`].
+//! [`crate::snapshot::SnapshotError`] and `navguard::tight::TightError` (the lab).
 //! [`LogError`] (a log no reader can read) is the log readers' own
 //! (crate `navguard-logs`), re-exported here because the streaming audit
 //! raises it too.

@@ -120,6 +120,7 @@ impl Default for Config {
     }
 }
 
+#[inline]
 fn num(field: &str, v: Option<f64>, lo: f64, hi: f64, default: f64) -> Result<f64, ConfigError> {
     match v {
         None => Ok(default),
@@ -128,6 +129,7 @@ fn num(field: &str, v: Option<f64>, lo: f64, hi: f64, default: f64) -> Result<f6
     }
 }
 
+#[inline]
 fn int(field: &str, v: Option<f64>, lo: usize, hi: usize, default: usize) -> Result<usize, ConfigError> {
     match v {
         None => Ok(default),
@@ -145,6 +147,7 @@ impl ConfigInput {
 
     /// Reject a field name that is not a config field (for front ends that
     /// deserialize field by field and so never see unknown keys).
+    #[inline]
     pub fn check_field_name(name: &str) -> Result<(), ConfigError> {
         if Self::FIELDS.contains(&name) {
             Ok(())
@@ -154,6 +157,7 @@ impl ConfigInput {
     }
 
     /// Validate into a [`Config`].
+    #[inline]
     pub fn check(&self) -> Result<Config, ConfigError> {
         let d = Config::default();
         let method = match &self.method {
@@ -203,6 +207,7 @@ impl ConfigInput {
     /// object into this form first, reading every field once). Each field
     /// is read by hand ([`input_of`]), not by serde's derive: the core wasm
     /// module then carries no deserializer; the messages are serde's.
+    #[inline]
     pub fn from_value(v: serde_json::Value) -> Result<Config, ConfigError> {
         let serde_json::Value::Object(map) = v else {
             return Err(ConfigError::new("", "must be a JSON object"));
@@ -216,6 +221,7 @@ impl ConfigInput {
 /// order, each name checked then its value, so with several bad fields the
 /// first reported is the one serde reported; a type error names its field,
 /// with serde_json's message for it.
+#[inline]
 fn input_of(map: &serde_json::Map<String, serde_json::Value>) -> Result<ConfigInput, ConfigError> {
     use plain::*;
     let mut input = ConfigInput::default();
@@ -269,6 +275,7 @@ mod plain {
     use crate::model::Model;
 
     /// How serde_json names a value it did not expect.
+    #[inline]
     fn unexpected(v: &Value) -> String {
         match v {
             Value::Null => "null".into(),
@@ -287,6 +294,7 @@ mod plain {
     /// A float as serde_json writes it in messages: the shortest digits,
     /// fixed for decimal exponents -5..=15 (`1000.0`, `0.00001`), else
     /// `1.5e+16`, `1e-7`.
+    #[inline]
     fn float_text(x: f64) -> String {
         let sci = format!("{:e}", x.abs());
         let (mant, exp) = sci.split_once('e').unwrap_or((&sci, "0"));
@@ -311,23 +319,28 @@ mod plain {
         format!("{sign}{body}")
     }
 
+    #[inline]
     fn invalid(v: &Value, expected: &str) -> String {
         format!("invalid type: {}, expected {expected}", unexpected(v))
     }
 
+    #[inline]
     pub fn f64_of(v: &Value) -> Result<f64, String> {
         v.as_f64().ok_or_else(|| invalid(v, "f64"))
     }
 
+    #[inline]
     pub fn string_of(v: &Value) -> Result<String, String> {
         v.as_str().map(str::to_string).ok_or_else(|| invalid(v, "a string"))
     }
 
+    #[inline]
     pub fn bool_of(v: &Value) -> Result<bool, String> {
         v.as_bool().ok_or_else(|| invalid(v, "a boolean"))
     }
 
     /// `[f64; N]`: elements first, then the length (as serde reads them).
+    #[inline]
     fn array_of<const N: usize>(v: &Value) -> Result<[f64; N], String> {
         let Value::Array(a) = v else { return Err(invalid(v, &format!("an array of length {N}"))) };
         let mut out = [0.0; N];
@@ -341,6 +354,7 @@ mod plain {
     }
 
     /// `[[f64; N]; K]`.
+    #[inline]
     fn rows_of<const N: usize, const K: usize>(v: &Value) -> Result<[[f64; N]; K], String> {
         let Value::Array(a) = v else { return Err(invalid(v, &format!("an array of length {K}"))) };
         let mut out = [[0.0; N]; K];
@@ -353,6 +367,7 @@ mod plain {
         Ok(out)
     }
 
+    #[inline]
     fn pairs_of(v: &Value) -> Result<Vec<[f64; 2]>, String> {
         let Value::Array(a) = v else { return Err(invalid(v, "a sequence")) };
         a.iter().map(array_of).collect()
@@ -360,10 +375,12 @@ mod plain {
 
     /// A struct's fields: those present read in key order (serde_json's
     /// map order), then the first missing one in declaration order.
+    #[inline]
     fn required<T>(v: Option<T>, name: &str) -> Result<T, String> {
         v.ok_or_else(|| format!("missing field `{name}`"))
     }
 
+    #[inline]
     fn anfis_of(v: &Value) -> Result<Anfis, String> {
         let Value::Object(m) = v else { return Err(invalid(v, "struct Anfis")) };
         // Key order: centre, conseq, sigma.
@@ -373,6 +390,7 @@ mod plain {
         Ok(Anfis { centre: required(centre, "centre")?, sigma: required(sigma, "sigma")?, conseq: required(conseq, "conseq")? })
     }
 
+    #[inline]
     pub fn model_of(v: &Value) -> Result<Model, String> {
         let Value::Object(m) = v else { return Err(invalid(v, "struct Model")) };
         // Key order: anfis, d1, d2, provenance (declaration order too).
@@ -387,6 +405,7 @@ mod plain {
 impl Config {
     /// The input form that checks to this config (model aside): used to
     /// re-validate a config read back from a snapshot.
+    #[inline]
     pub fn to_input(&self) -> ConfigInput {
         let n = &self.noise;
         ConfigInput {

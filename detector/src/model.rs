@@ -1,6 +1,6 @@
 //! The trained model: ANFIS parameters plus the initial databases D1₀, D2₀
 //! (Sun et al. 2017 §2.4), the model shipped in the crate and its checks.
-//! Training lives in [`crate::calibrate`]; this module only holds and checks
+//! Training lives in `navguard::calibrate` (the lab); this module only holds and checks
 //! models, so the detector can use one without pulling in the trainer.
 
 use serde::{Deserialize, Serialize};
@@ -9,7 +9,7 @@ use crate::anfis::Anfis;
 
 /// The shipped model in [`crate::codec`] bytes (postcard's; every f64
 /// bit-exact): the model that
-/// serde_json reads from `src/default_model.json` (what `navguard-train`
+/// serde_json reads from `detector/src/default_model.json` (what `navguard-train`
 /// writes, readable and diffable), stored as binary so that a build without
 /// serde_json (the core wasm module) carries 16 KB instead of 42 KB of JSON
 /// and no JSON parser. `embedded_model_is_the_json_exactly` holds the two
@@ -41,6 +41,7 @@ pub struct Model {
 impl Model {
     /// The model shipped in the crate, made by `cargo run --release --bin navguard-train`.
     /// Decoded once per process from [`EMBEDDED_MODEL`], then cloned.
+    #[inline]
     pub fn embedded() -> Result<Model, String> {
         static EMBEDDED: std::sync::OnceLock<Result<Model, String>> = std::sync::OnceLock::new();
         EMBEDDED.get_or_init(|| crate::codec::from_bytes(EMBEDDED_MODEL).map_err(|e| format!("embedded model: {e}"))).clone()
@@ -77,6 +78,7 @@ const SIG_R: f64 = 3.0;
 const SIG_C: f64 = 0.7;
 
 /// Used by [`Model::check`] and by snapshot restore.
+#[inline]
 pub(crate) fn check_anfis(a: &Anfis) -> Result<(), String> {
     if a.is_finite() {
         Ok(())
@@ -93,7 +95,7 @@ mod tests {
     /// The embedded binary is exactly what the JSON parses to (as the crate
     /// read it before the model shipped in binary), so the detector's
     /// verdicts did not move. `NAVGUARD_WRITE_MODEL=1 cargo test --release
-    /// --lib embedded_model` rewrites `src/default_model.bin` from the JSON.
+    /// --lib embedded_model` rewrites `detector/src/default_model.bin` from the JSON.
     #[test]
     fn embedded_model_is_the_json_exactly() {
         let json = include_str!("default_model.json");
@@ -101,7 +103,7 @@ mod tests {
         if std::env::var_os("NAVGUARD_WRITE_MODEL").is_some() {
             std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/src/default_model.bin"), &bytes).unwrap();
         }
-        assert!(bytes == EMBEDDED_MODEL, "src/default_model.bin differs from src/default_model.json");
+        assert!(bytes == EMBEDDED_MODEL, "detector/src/default_model.bin differs from detector/src/default_model.json");
         // The codec writes postcard's bytes (the file's first writer).
         assert!(postcard::to_allocvec(&serde_json::from_str::<Model>(json).unwrap()).unwrap() == EMBEDDED_MODEL);
         let from_json: Model = serde_json::from_str(json).unwrap();
