@@ -1,10 +1,14 @@
-//! Trace one battery flight: `bprobe tune|eval INDEX` prints each GPS epoch.
+//! Trace one battery flight: `bprobe tune|eval INDEX [IMU_HZ]` prints each
+//! GPS epoch (optionally with the flight's IMU at another rate).
 use navguard::{battery, config::Config, detector::Detector};
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
     let split = battery::Split::parse(&a[1]).unwrap();
-    let f = battery::Flight::draw(split, a[2].parse().unwrap());
+    let mut f = battery::Flight::draw(split, a[2].parse().unwrap());
+    if let Some(hz) = a.get(3) {
+        f = f.with_imu_rate(hz.parse().unwrap());
+    }
     println!("# {}\n# {:?}", f.describe(), f.baro);
     let rows = battery::simulate(&f);
     let mut det = Detector::new(Config::default()).unwrap();

@@ -75,10 +75,12 @@ fn a_fix_the_receiver_declares_degraded_is_flagged_for_its_whole_length() {
     assert_eq!(after, 0, "epochs still declared after the end");
 }
 
-/// The receiver's word changes only the output: the same clean flight with
-/// four satellites reported for 10 s is flagged `DEGRADED` there (and on
-/// the rows up to the next fix), and every other row's verdict, F and R
-/// are bit-identical to the flight as recorded.
+/// The receiver's word: the same clean flight with four satellites reported
+/// for 10 s is flagged `DEGRADED` there (and on the rows up to the next
+/// fix). Besides the output it changes only what the IMU test sees (the
+/// degraded velocity is not fed to it, its 3 s window restarts): every row
+/// before the window is bit-identical to the flight as recorded, and every
+/// verdict from 4 s after it.
 #[test]
 fn four_satellites_are_declared_degraded_and_change_nothing_else() {
     use navguard::detector::kind;
@@ -89,15 +91,31 @@ fn four_satellites_are_declared_degraded_and_change_nothing_else() {
     let few: Vec<Sample> = rows.iter().map(|s| if s.t >= t0 && s.t < t0 + 10.0 && s.sats.is_finite() { Sample { sats: 4.0, ..*s } } else { *s }).collect();
     let (a, b) = (outputs(&rows), outputs(&few));
     assert!(a.iter().all(|o| o.kind != kind::DEGRADED), "a clean flight declared degraded");
-    let gps_period = 1.0; // tune #1 logs its GPS at 1 Hz
     for ((s, x), y) in rows.iter().zip(&a).zip(&b) {
-        assert_eq!((x.f.to_bits(), x.r.to_bits()), (y.f.to_bits(), y.r.to_bits()), "F or R changed at {}", s.t);
-        let window = s.t >= t0 && s.t < t0 + 10.0;
-        let tail = s.t >= t0 + 10.0 && s.t < t0 + 10.0 + gps_period + 1e-9;
-        if window && s.sats.is_finite() {
+        if s.t < t0 {
+            assert_eq!(x, y, "changed before the window at {}", s.t);
+        } else if s.t < t0 + 10.0 && s.sats.is_finite() {
             assert_eq!((y.status, y.kind), (1, kind::DEGRADED), "not declared at {}", s.t);
-        } else if !window && !tail {
+        } else if s.t >= t0 + 14.0 {
             assert_eq!((x.status, x.kind), (y.status, y.kind), "verdict changed at {}", s.t);
         }
     }
+}
+
+/// IMU-rate invariance after a degraded fix (issue 14: the same flight at
+/// IMU 50/100/200/400 Hz is flagged within 0.2 points): a velocity the
+/// receiver calls degraded does not feed the IMU test. Regression: the
+/// IMU-rate check's eval #510000 (1 Hz GPS, a 13 s degraded fix) flagged
+/// 2.44% at 50/100 Hz and 2.79% at 200/400 Hz, the IMU test judging the
+/// GPS velocity of the degraded stretch for 2–3 epochs after it.
+#[test]
+fn the_imu_test_ignores_a_velocity_the_receiver_calls_degraded() {
+    let pct: Vec<f64> = battery::imu_rate_flights(0)
+        .iter()
+        .map(|f| {
+            assert_eq!(f.faults[0].kind.name(), "degraded");
+            battery::run(f, &Config::default()).unwrap().flagged_pct()
+        })
+        .collect();
+    assert!(battery::spread(&pct) <= 0.2, "flagged at 50/100/200/400 Hz: {pct:?}");
 }

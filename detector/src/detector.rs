@@ -1103,7 +1103,7 @@ impl Consistency {
     /// IMU consistency tests, decide whether the IMU test joins R, and close
     /// the epoch's indicators. `vel_withheld`: the GPS velocity is withheld;
     /// `learn_rate`: the receiver is trusted enough to teach the clock rate.
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool) -> Indicators {
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool) -> Indicators {
         let (t, y) = (fix.t, fix.y);
         // The receiver's own time, when the log has it, measures the clock
         // whatever the vehicle does (inside episodes too).
@@ -1153,8 +1153,8 @@ impl Consistency {
             self.imu_gap = false;
         }
         match &fix.vel {
-            Some(v) => ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
-            None => ind.clear_imu(),
+            Some(v) if !declared => ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
+            _ => ind.clear_imu(),
         }
         ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
@@ -1924,9 +1924,9 @@ impl Detector {
         out.t = t;
         self.last = out;
         // A fix the receiver itself declares degraded is reported as such,
-        // between fixes too, unless there is no fix to speak of. Only the
-        // output: the detector's own verdict (`self.last`) learns and
-        // feeds as before, with the fix down-weighted by its claim.
+        // between fixes too, unless there is no fix to speak of. The
+        // detector's own verdict (`self.last`) learns and feeds as before,
+        // with the fix down-weighted by its claim.
         if self.quality.declared && !matches!(out.kind, kind::OUTAGE | kind::STALE | kind::NO_GPS) {
             out.status = 1;
             out.kind = kind::DEGRADED;
@@ -2120,7 +2120,10 @@ impl Detector {
         // does not average out over headings and taught the clock a wrong
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
-        let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate);
+        // The receiver's own word (reported by `push_valid`): a velocity it
+        // calls degraded does not judge the IMU.
+        let declared = self.quality.declares_degraded(&fix);
+        let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -2175,8 +2178,6 @@ impl Detector {
         if !restart {
             self.learn(step.fault, &verdict, &ind);
         }
-        // The receiver's own word (reported by `push_valid`).
-        self.quality.declares_degraded(&fix);
         Output {
             t: fix.t,
             status: step.fault as u8,
