@@ -156,6 +156,8 @@ pub struct Auditor {
 
 #[wasm_bindgen]
 impl Auditor {
+    /// Read the whole log `bytes` (any supported format) and set up the
+    /// detector with `config`; nothing is pushed until `step`.
     #[wasm_bindgen(constructor)]
     pub fn new(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue, #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue) -> Result<Auditor, JsError> {
         let cfg = config_from(&config)?;
@@ -209,6 +211,8 @@ pub struct StreamAuditor {
 
 #[wasm_bindgen]
 impl StreamAuditor {
+    /// A streaming audit with `config`; `keepOutputs` keeps each chunk's
+    /// per-row outputs for `outputs()`.
     #[wasm_bindgen(constructor)]
     pub fn new(
         #[wasm_bindgen(unchecked_param_type = "DetectorConfig | undefined")] config: JsValue,

@@ -264,6 +264,8 @@ pub struct F64Source {
 }
 
 impl F64Source {
+    /// Check `v` (at most `max` elements; `what` names it in errors) and
+    /// read its buffer and offset once.
     pub fn new(v: &JsValue, max: usize, what: &str) -> Result<Self, String> {
         let len = typed_len::<Float64Array>(v, max, what, "Float64Array")?;
         let t: &Typed = v.unchecked_ref();
@@ -274,6 +276,7 @@ impl F64Source {
         Ok(src)
     }
 
+    /// Elements in the array.
     pub fn len(&self) -> usize {
         self.len
     }

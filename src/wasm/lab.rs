@@ -64,6 +64,9 @@ struct CompareOptions {
 
 #[wasm_bindgen]
 impl CompareRun {
+    /// A comparison of `options.methods` (default: all) over `options.seeds`
+    /// seeds of the seeded battery, or `options.flights` flights of the
+    /// randomised battery's `options.battery` split.
     #[wasm_bindgen(constructor)]
     pub fn new(#[wasm_bindgen(js_name = options, unchecked_param_type = "CompareOptions | undefined")] opts: JsValue) -> Result<CompareRun, JsError> {
         let o: CompareOptions = options(&opts, "compare options")?;
