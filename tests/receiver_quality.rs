@@ -119,3 +119,24 @@ fn the_imu_test_ignores_a_velocity_the_receiver_calls_degraded() {
         .collect();
     assert!(battery::spread(&pct) <= 0.2, "flagged at 50/100/200/400 Hz: {pct:?}");
 }
+
+/// A declaration does not outlive a logging gap: the first fix after it is
+/// judged afresh (it started the filter before any test and would have
+/// carried the last declaration before the gap).
+#[test]
+fn a_declaration_ends_with_the_first_usual_fix_after_a_data_gap() {
+    use navguard::detector::kind;
+    let f = Flight::draw(Split::Tune, 1);
+    let rows = battery::simulate(&f);
+    let t0 = rows.iter().find(|s| !s.label.is_nan()).unwrap().t + 60.0;
+    // Four satellites for 5 s, then every sensor silent for 5 s (a data gap).
+    let cut: Vec<Sample> = rows
+        .iter()
+        .filter(|s| !(s.t >= t0 + 5.0 && s.t < t0 + 10.0))
+        .map(|s| if s.t >= t0 && s.t < t0 + 5.0 && s.sats.is_finite() { Sample { sats: 4.0, ..*s } } else { *s })
+        .collect();
+    let out = outputs(&cut);
+    let first_after = cut.iter().zip(&out).find(|(s, o)| s.t >= t0 + 10.0 && o.gps_epoch).unwrap();
+    assert_ne!(first_after.1.kind, kind::DEGRADED, "declared at {} after the gap", first_after.0.t);
+    assert!(cut.iter().zip(&out).any(|(s, o)| s.t < t0 + 5.0 && o.kind == kind::DEGRADED));
+}

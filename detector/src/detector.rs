@@ -2109,6 +2109,11 @@ impl Detector {
         self.clock.fix(s.t);
         let anchor = *self.anchor.get_or_insert_with(|| Anchor::from_sample(s));
         let fix = Fix::new(s, &anchor);
+        // The receiver's own word, at every fix (the first after a start or
+        // a data gap too, so no earlier declaration outlives it): reported
+        // by `push_valid`, and a velocity it calls degraded does not judge
+        // the IMU.
+        let declared = self.quality.declares_degraded(&fix);
         let Some(kf) = self.kf.as_mut() else {
             self.start_filter(&fix);
             return Output { t: fix.t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
@@ -2120,9 +2125,6 @@ impl Detector {
         // does not average out over headings and taught the clock a wrong
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
-        // The receiver's own word (reported by `push_valid`): a velocity it
-        // calls degraded does not judge the IMU.
-        let declared = self.quality.declares_degraded(&fix);
         let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
