@@ -50,6 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
+use crate::drift::{DriftTest, Motion};
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
@@ -275,6 +276,9 @@ const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
 /// s: time constant of the learnt accelerometer noise.
 const IMU_PSD_TAU: f64 = 2.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
+/// The baro drift statistic's scale into the baro group's R: its hold level
+/// (`drift::DRIFT_Z`) lands just above the ANFIS boundary (R ≈ 2.55).
+const DRIFT_R_SCALE: f64 = 2.8 / crate::drift::DRIFT_Z;
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
 const RECOVER_INC: f64 = 2.0;
@@ -359,6 +363,9 @@ struct Fix {
     vel: Option<Vector3<f64>>,
     /// The receiver's horizontal accuracy claim, m (NaN when absent).
     eph: f64,
+    /// Its vertical claim, m: `epv`, else 1.5 × `eph` (vertical dilution is
+    /// typically 1.5× the horizontal); NaN when neither is given.
+    epv: f64,
     /// The receiver's own time of the fix, s (NaN when the log has none).
     gps_time: f64,
     /// Satellites in use and fix type (2 = 2D, 3 = 3D), NaN when absent.
@@ -373,6 +380,7 @@ impl Fix {
             y: anchor.to_ned(s),
             vel: s.has_velocity().then(|| Vector3::new(s.vn, s.ve, s.vd)),
             eph: s.eph,
+            epv: if s.epv.is_finite() { s.epv } else { 1.5 * s.eph },
             gps_time: s.gps_time,
             sats: s.sats,
             fix_type: s.fix,
@@ -753,6 +761,10 @@ struct Consistency {
     /// the first.
     baro_gps_level: VelocityTrack,
     baro_dop_level: VelocityTrack,
+    /// The baro's drift against both levels over a long window, and its
+    /// statistic at the last GPS epoch (NaN when not judged).
+    baro_drift: DriftTest,
+    drift_stat: f64,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
     /// vertical velocity up m/s or NaN when it was not trusted).
     baro_epoch: Option<(f64, f64, f64)>,
@@ -1032,6 +1044,8 @@ impl Consistency {
             track: VelocityTrack::default(),
             baro_gps_level: VelocityTrack::default(),
             baro_dop_level: VelocityTrack::default(),
+            baro_drift: DriftTest::default(),
+            drift_stat: f64::NAN,
             baro_epoch: None,
         }
     }
@@ -1060,7 +1074,8 @@ impl Consistency {
     }
 
     /// The baro's levels at a GPS epoch at `t` (position `y` NED m, GPS
-    /// velocity `v` when it is trusted), with the latest baro sample. The
+    /// velocity `v` when it is trusted, vertical accuracy claim `epv` m),
+    /// with the latest baro sample. The
     /// level against the GPS altitude needs no velocity. The level against
     /// the vertical velocity integrates the GPS velocity while it is
     /// trusted, and the filter's own (IMU-coasted) vertical velocity while
@@ -1068,13 +1083,15 @@ impl Consistency {
     /// judged against the level learnt before it: restarting the levels
     /// there learnt the faulty baro as the new level, and its return was
     /// flagged for up to 120 s (battery tune #131).
-    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>) {
+    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64) {
         let vup = v.map_or(f64::NAN, |v| -v[2]);
         let prev = self.baro_epoch.replace((t, self.alt_int, vup));
         let baro = self.last_baro.filter(|(tb, _)| t - tb < 0.5).map(|(_, b)| b);
         let (Some(b), Some((pt, alt0, vup0))) = (baro, prev.filter(|(pt, ..)| t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S)) else {
             self.baro_gps_level.clear();
             self.baro_dop_level.clear();
+            self.baro_drift.clear();
+            self.drift_stat = f64::NAN;
             return;
         };
         let dt = (t - pt) * self.rate.scale;
@@ -1083,6 +1100,9 @@ impl Consistency {
         // interval (its integral, `alt_int`, advances in true time).
         let (v1, v0) = if vup.is_finite() && vup0.is_finite() { (vup, vup0) } else { let c = (self.alt_int - alt0) / dt; (c, c) };
         self.baro_dop_level.step(dt, [b, 0.0, 0.0], [v1, 0.0, 0.0], [v0, 0.0, 0.0]);
+        let level = [self.baro_gps_level.level(), self.baro_dop_level.level()];
+        let motion = Motion { speed2: v.map_or(f64::NAN, |v| v[0] * v[0] + v[1] * v[1]), climb: v1, height: -y[2] };
+        self.drift_stat = self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv);
     }
 
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
@@ -1140,7 +1160,7 @@ impl Consistency {
             }
         }
         self.last_gps = fix.vel.map(|v| (t, y, v));
-        self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld));
+        self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld), fix.epv);
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
             ind.observe_baro_gps(t, b + y[2]);
@@ -1162,6 +1182,8 @@ impl Consistency {
         // (NaN, not judged, unless both are).
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
         let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
+        // The baro's drift over a long window, against both (see `drift`).
+        let dep = dep.max(self.drift_stat * DRIFT_R_SCALE);
         if dep.is_finite() && out.r_group[2].is_finite() && dep > out.r_group[2] {
             out.r_group[2] = dep;
             out.r = out.r.max(dep);
@@ -2138,7 +2160,10 @@ impl Detector {
                 self.quality.scale(fix.eph) < QUALITY_DEGRADED,
                 core::array::from_fn(|a| self.ind.sigma(3 + a)),
             );
-        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended);
+        // The GPS altitude back on the baro's level after a drift the two
+        // GPS references shared: a vertical drag-off ended (see `drift`).
+        let gps_back = self.consistency.baro_drift.gps_returned();
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
         // the fault (or the test would see the learnt error after it ends).
@@ -2158,6 +2183,7 @@ impl Detector {
             self.consistency.track.learn();
             self.consistency.baro_gps_level.learn();
             self.consistency.baro_dop_level.learn();
+            self.consistency.baro_drift.learn();
         }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
@@ -2482,7 +2508,7 @@ mod tests {
     #[test]
     fn the_receiver_declares_a_degraded_fix_in_its_own_fields() {
         let mut q = ReceiverQuality::default();
-        let fix = |eph: f64, sats: f64, fix_type: f64| Fix { t: 0.0, y: Vector3::zeros(), vel: None, eph, gps_time: f64::NAN, sats, fix_type };
+        let fix = |eph: f64, sats: f64, fix_type: f64| Fix { t: 0.0, y: Vector3::zeros(), vel: None, eph, epv: f64::NAN, gps_time: f64::NAN, sats, fix_type };
         // Still acquiring (2D, then 4 satellites): not declared.
         assert!(!q.declares_degraded(&fix(5.0, 9.0, 2.0)) && !q.declares_degraded(&fix(5.0, 4.0, 3.0)));
         for _ in 0..60 {
@@ -2901,7 +2927,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, drift_stat, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

@@ -55,8 +55,10 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// position episode keeps the offset it re-anchored onto when it coasted
 /// out. 8: the baro's level against the GPS altitude and the integrated
 /// GPS vertical velocity. 9: the receiver's own declaration of a degraded
-/// fix (`kind::DEGRADED`) and the run of usual fixes that lifts it.
-pub const VERSION: u32 = 9;
+/// fix (`kind::DEGRADED`) and the run of usual fixes that lifts it. 10:
+/// the baro's drift test over 30 s against both GPS references
+/// (`drift::DriftTest`).
+pub const VERSION: u32 = 10;
 
 #[derive(Clone)]
 struct Header {

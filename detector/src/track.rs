@@ -130,6 +130,12 @@ impl VelocityTrack {
         }
     }
 
+    /// `d` on the first axis (m): the level a one-axis track follows. None
+    /// before its first step.
+    pub fn level(&self) -> Option<f64> {
+        self.d.map(|d| d[0])
+    }
+
     /// How far the GPS position moved off its own velocity track at the
     /// last fix, m (NED): `d − d_prev`. None before two fixes. A jump of the
     /// receiver shows here; a filter pulled by another sensor does not.

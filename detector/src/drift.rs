@@ -1,0 +1,452 @@
+//! The baro's slow drift, judged against both GPS references over a long
+//! window.
+//!
+//! The baro's levels (`track::VelocityTrack` on one axis: the baro against
+//! the GPS altitude, and against the GPS vertical velocity integrated) learn
+//! their baseline and σ from the flight itself, so a drift that begins before
+//! they have lived 30 s, or grows slowly enough, is learnt as their own
+//! wander: a ramp measured against its own running mean and spread always
+//! sits within 2σ (battery tune #2: 0.43 m/s for 88 s, 38 m, never
+//! flagged). The baro–filter test removes a learnt baseline rate by design.
+//!
+//! Here the statistic is the change of each level over the last `SPAN_S`
+//! (true time), over a σ of that change that is learnt only slowly (time
+//! constant `TAU_S`, winsorised at 3σ, from a physical prior), so a ramp
+//! cannot teach it its own size within the window. A drifting baro moves
+//! both levels the same way; a GPS vertical fault moves only the first (the
+//! Doppler velocity carries no position fault) or, dragged off with its
+//! velocity, both by the same amount in the sense of the GPS, which the
+//! other tests judge. The drift is read as `min(z_gps, z_dop)` when the two
+//! changes agree in sign, else 0.
+//!
+//! Only epochs the detector called normal enter the window, and none while
+//! a drift is being judged (from the statistic reaching `DRIFT_Z` until it
+//! falls below `RELEASE_Z`, so an epoch of the drift that dips below the
+//! call does not move the window's start into it): the drift is measured
+//! from the level before it, the episode lasts while the baro is off that
+//! level, and its end (the baro back) restarts the window. The first normal
+//! epoch after another sensor's episode restarts it too (its start may lie
+//! in that fault's unflagged onset). A start older than `MAX_REF_S` is
+//! dropped, so a long episode does not judge the baro against a level from
+//! minutes ago.
+//!
+//! A GPS vertical drag-off (position and velocity moved together) moves
+//! both levels like a baro drift. Its end tells them apart: the GPS
+//! altitude jumps back onto the baro's level from before, while the
+//! Doppler integral, which integrated the dragged velocity, stays off.
+//! `gps_returned` reports that epoch, so the detector re-anchors on the
+//! GPS instead of reading its return as a new position fault (battery eval
+//! #113: a 0.39 m/s vertical drag-off for 120 s, whose return was flagged
+//! for the 50 s left of the flight).
+//!
+//! A baro's healthy error moves with the motion: dynamic pressure with
+//! the speed squared, prop-wash with the climb rate, ground effect near the
+//! ground (the battery's baro draws these; real flights show 2–6 m at
+//! 2–6 m/s). Each change is judged net of an allowance for how much the
+//! motion changed over the window: `K_DYN·|Δ(v²)| + K_CLIMB·|Δv_up|`, plus
+//! `GROUND_M` when either end is within `GROUND_BAND_M` of the first fix's
+//! height. The constants are generous physical bounds, not fits: a fixed
+//! wing landing from 20 m/s moves its baro by up to 6 m, which is not a
+//! drift.
+//!
+//! The GPS altitude's σ is never taken below the receiver's own vertical
+//! accuracy claim (`epv`, else 1.5 × `eph`): a receiver that says its
+//! height is good to 4 m (HDOP 2.8 with 7 satellites on the vibrating
+//! ArduCopter log 8-10, whose GPS altitude fell 19 m over 35 s while the
+//! baro and the throttle say the vehicle stayed low and landed) wanders by
+//! that much over half a minute.
+//!
+//! Entries are kept at most one per `STEP_S`, so the window's cost and its
+//! statistic do not depend on the GPS rate.
+use serde::{Deserialize, Serialize};
+
+/// Window, true s.
+pub const SPAN_S: f64 = 30.0;
+/// Spacing of the window's entries, true s.
+const STEP_S: f64 = 1.0;
+/// Time constant of σ's learning, true s.
+const TAU_S: f64 = 120.0;
+/// σ prior and floor per reference (GPS altitude, Doppler integral), m: the
+/// GPS altitude wanders by metres over half a minute; the baro against the
+/// Doppler integral moves with its own error.
+const SIGMA0_M: [f64; 2] = [2.5, 1.5];
+const FLOOR_M: [f64; 2] = [1.5, 1.0];
+/// Motion allowance: m per (m/s)² of horizontal speed squared (a static
+/// port's dynamic-pressure error, up to ~0.02), m per m/s of climb rate
+/// (prop-wash), m near the ground within a band of m.
+const K_DYN: f64 = 0.02;
+const K_CLIMB: f64 = 1.0;
+const GROUND_M: f64 = 2.0;
+const GROUND_BAND_M: f64 = 5.0;
+/// Statistic at which a drift is called (see `DRIFT_R_SCALE` in
+/// `detector`).
+pub const DRIFT_Z: f64 = 3.0;
+/// Time constant of the levels' smoothing, true s.
+const SMOOTH_S: f64 = 2.0;
+/// The recent span whose rate must carry the drift too, true s.
+const RECENT_S: f64 = 15.0;
+/// Statistic below which a drift being judged is over.
+const RELEASE_Z: f64 = 2.0;
+/// A gap this long between normal epochs (an episode) restarts the
+/// window, true s.
+const RESTART_S: f64 = 5.0;
+/// Oldest window start kept while no normal epoch comes, true s.
+const MAX_REF_S: f64 = 120.0;
+
+/// The vehicle's motion at an epoch: horizontal speed squared (m²/s²),
+/// climb rate (m/s, up), height above the first fix (m).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Motion {
+    pub speed2: f64,
+    pub climb: f64,
+    pub height: f64,
+}
+
+impl Motion {
+    /// How far a healthy baro's error may move between `self` and `o`, m.
+    fn allowance(&self, o: &Motion) -> f64 {
+        let ground = if self.height.min(o.height) < GROUND_BAND_M { GROUND_M } else { 0.0 };
+        K_DYN * (self.speed2 - o.speed2).abs() + K_CLIMB * (self.climb - o.climb).abs() + ground
+    }
+}
+
+/// One window entry: true s, both levels (m), the motion.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+struct Entry {
+    t: f64,
+    level: [f64; 2],
+    motion: Motion,
+}
+
+/// See the module docs. Levels in m, times in true s.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct DriftTest {
+    /// True time since the test began, s.
+    t: f64,
+    /// Entries of normal epochs, oldest first, spaced by at least `STEP_S`.
+    ring: Vec<Entry>,
+    /// Learnt mean square of the window change per reference (net of the
+    /// motion allowance), m²; 0 before the first (the prior then applies).
+    ms: [f64; 2],
+    /// This epoch's entry, entered into the window if it is normal.
+    pending: Option<Entry>,
+    /// The last change per reference net of the allowance (NaN while the
+    /// window is short), and the time it spans.
+    last: [f64; 2],
+    last_span: f64,
+    /// The last interval's length, s.
+    dt: f64,
+    /// The last motion given; stands in for a part that is unknown (the
+    /// GPS velocity withheld).
+    motion: Motion,
+    /// The receiver's vertical accuracy claim at the last epoch, m (NaN
+    /// when it makes none): the GPS altitude's σ is not taken below it.
+    claim_v: f64,
+    /// Every epoch's entry over the last `RECENT_S`, at most one per
+    /// `STEP_S` (normal or not).
+    recent: Vec<Entry>,
+    /// The levels smoothed over `SMOOTH_S` (m); None before the first.
+    smooth: Option<[f64; 2]>,
+    /// A drift is being judged (see the module docs).
+    judging: bool,
+    /// The last epoch ended a drift with the GPS altitude back on the
+    /// baro's level and the Doppler integral still off.
+    returned: bool,
+}
+
+/// The change of both levels from `a` to `b` times `scale`, net of the
+/// motion allowance (its sign kept, 0 inside the allowance).
+fn net_change(a: &Entry, b: &Entry, scale: f64) -> [f64; 2] {
+    let allow = b.motion.allowance(&a.motion);
+    core::array::from_fn(|k| {
+        let s = (b.level[k] - a.level[k]) * scale;
+        s.signum() * (s.abs() - allow).max(0.0)
+    })
+}
+
+impl DriftTest {
+    /// Restart (the levels restarted: nothing to continue).
+    pub fn clear(&mut self) {
+        let (ms, motion) = (self.ms, self.motion);
+        *self = DriftTest { ms, motion, ..DriftTest::default() };
+    }
+
+    fn sigma(&self, k: usize) -> f64 {
+        let ms = if self.ms[k] > 0.0 { self.ms[k] } else { SIGMA0_M[k] * SIGMA0_M[k] };
+        let s = ms.sqrt().max(FLOOR_M[k]);
+        if k == 0 && self.claim_v > s { self.claim_v } else { s }
+    }
+
+    /// One GPS epoch `dt` true s after the last, with both levels (m), the
+    /// motion (a NaN part: the last one given) and the receiver's vertical
+    /// accuracy claim `claim_v` (m, NaN when none). Returns the drift
+    /// statistic (see the module docs); NaN while the window spans less
+    /// than `SPAN_S`.
+    pub fn push(&mut self, dt: f64, level: [f64; 2], motion: Motion, claim_v: f64) -> f64 {
+        self.last = [f64::NAN; 2];
+        self.pending = None;
+        self.returned = false;
+        self.claim_v = claim_v;
+        let or = |x: f64, y: f64| if x.is_finite() { x } else { y };
+        let motion = Motion {
+            speed2: or(motion.speed2, self.motion.speed2),
+            climb: or(motion.climb, self.motion.climb),
+            height: or(motion.height, self.motion.height),
+        };
+        self.motion = motion;
+        if !(dt >= 0.0 && level.iter().all(|x| x.is_finite())) {
+            self.clear();
+            return f64::NAN;
+        }
+        self.t += dt;
+        self.dt = dt;
+        let t = self.t;
+        // Smoothed over `SMOOTH_S`: a single fix's altitude carries the
+        // receiver's white noise (1–2 m at 5 Hz), which a ramp's change
+        // over the window does not need to compete with.
+        let w = (dt / SMOOTH_S).min(1.0);
+        let raw = Entry { t, level, motion };
+        let level = match self.smooth {
+            Some(p) => core::array::from_fn(|k| p[k] + w * (level[k] - p[k])),
+            None => level,
+        };
+        self.smooth = Some(level);
+        let e = Entry { t, level, motion };
+        self.pending = Some(e);
+        self.note_recent(e);
+        if self.ring.first().is_some_and(|e| t - e.t > MAX_REF_S) {
+            self.ring.clear();
+        }
+        let Some(e0) = self.ring.first().filter(|e| t - e.t >= SPAN_S).copied() else {
+            return f64::NAN;
+        };
+        self.last_span = t - e0.t;
+        self.last = net_change(&e0, &e, 1.0);
+        // The recent change, scaled to the window (what the rate of the
+        // last `RECENT_S` gives over `SPAN_S`).
+        let r0 = self.recent[0];
+        let recent = if t - r0.t >= 0.5 * RECENT_S { net_change(&r0, &e, SPAN_S / (t - r0.t)) } else { [f64::NAN; 2] };
+        let z: [f64; 2] = core::array::from_fn(|k| self.last[k].abs() / self.sigma(k));
+        let full = if self.last[0] * self.last[1] > 0.0 { z[0].min(z[1]) } else { 0.0 };
+        if self.judging {
+            // Judged from the level before the drift until the baro is back
+            // on it (by either reference). The GPS altitude's return after a
+            // vertical drag-off is one jump: read on this fix alone, not
+            // after the smoothing has followed it.
+            let z_raw = net_change(&e0, &raw, 1.0)[0].abs() / self.sigma(0);
+            if full < RELEASE_Z || (z_raw < RELEASE_Z && z[1] >= DRIFT_Z) {
+                self.judging = false;
+                self.returned = z_raw.min(z[0]) < RELEASE_Z && z[1] >= DRIFT_Z;
+                self.ring.clear();
+                self.smooth = Some(raw.level);
+                return full.min(z_raw);
+            }
+            return full;
+        }
+        let zr: [f64; 2] = core::array::from_fn(|k| recent[k].abs() / self.sigma(k));
+        let going_on = (0..2).all(|k| recent[k] * self.last[k] > 0.0);
+        let stat = if going_on { full.min(zr[0]).min(zr[1]) } else { 0.0 };
+        self.judging = stat >= DRIFT_Z;
+        stat
+    }
+
+    /// Keep one entry per `STEP_S` of every epoch (normal or not) over the
+    /// last `RECENT_S`: the start of the recent change.
+    fn note_recent(&mut self, e: Entry) {
+        if self.recent.last().is_none_or(|l| e.t - l.t >= STEP_S) {
+            self.recent.push(e);
+        }
+        while self.recent.len() > 2 && e.t - self.recent[1].t >= RECENT_S {
+            self.recent.remove(0);
+        }
+    }
+
+    /// This epoch ended a drift with the GPS altitude back on the baro's
+    /// level from before it and the Doppler integral still off: a GPS
+    /// vertical drag-off's end (see the module docs).
+    pub fn gps_returned(&self) -> bool {
+        self.returned
+    }
+
+    /// The last epoch was normal: its entry enters the window (at most one
+    /// per `STEP_S`; the start kept is the newest at least `SPAN_S` old),
+    /// and σ learns from its change (winsorised at 3σ) when the change
+    /// spans about `SPAN_S`.
+    pub fn learn(&mut self) {
+        let Some(e) = self.pending.take().filter(|_| !self.judging) else { return };
+        let t = e.t;
+        if self.ring.last().is_some_and(|l| t - l.t > RESTART_S) {
+            // The first normal epoch after an episode: the window restarts,
+            // as its start may sit inside the fault's unflagged onset.
+            self.ring.clear();
+        }
+        if self.ring.last().is_none_or(|l| t - l.t >= STEP_S) {
+            self.ring.push(e);
+        }
+        while self.ring.len() > 2 && t - self.ring[1].t >= SPAN_S {
+            self.ring.remove(0);
+        }
+        if !(self.last_span <= 1.5 * SPAN_S) {
+            return;
+        }
+        let w = (self.dt / TAU_S).min(1.0);
+        for k in 0..2 {
+            let s = self.last[k];
+            if s.is_finite() {
+                let sg = self.sigma(k);
+                let ms = if self.ms[k] > 0.0 { self.ms[k] } else { sg * sg };
+                self.ms[k] = ms + w * ((s * s).min(9.0 * sg * sg) - ms);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Cruising at 10 m/s, level, 50 m up.
+    const CRUISE: Motion = Motion { speed2: 100.0, climb: 0.0, height: 50.0 };
+
+    /// Feed `n` epochs at `hz` from `t0` whose levels are `f(t)`, learning
+    /// from every epoch below `DRIFT_Z` (the detector learns from normal
+    /// epochs); the statistics.
+    fn run(d: &mut DriftTest, t0: f64, n: usize, hz: f64, f: &dyn Fn(f64) -> [f64; 2]) -> Vec<f64> {
+        (0..n)
+            .map(|i| {
+                let s = d.push(1.0 / hz, f(t0 + i as f64 / hz), CRUISE, f64::NAN);
+                if !(s >= DRIFT_Z) {
+                    d.learn();
+                }
+                s
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_drift_from_the_start_is_flagged_and_ends_when_the_baro_is_back() {
+        let mut d = DriftTest::default();
+        // 0.4 m/s on both levels from t = 5 s to 65 s, then back to 0.
+        let lvl = |t: f64| {
+            let x = if (5.0..65.0).contains(&t) { 0.4 * (t - 5.0) } else { 0.0 };
+            [x, x]
+        };
+        let s = run(&mut d, 0.0, 1200, 10.0, &lvl);
+        // At t = 40 s the window holds 30 s of drift: 12 m over σ ≤ 2.5.
+        assert!(s[400] >= DRIFT_Z, "{}", s[400]);
+        // Near the end, measured from before the drift: 23.6 m less the
+        // smoothing's lag (0.4 m/s × (2 s − one 0.1 s step)), over the GPS
+        // altitude's prior σ.
+        assert!((s[640] - (23.6 - 0.76) / 2.5).abs() < 1e-6, "{}", s[640]);
+        // Flagged throughout, and nothing once the baro is back.
+        assert!(s[400..650].iter().all(|x| *x >= DRIFT_Z));
+        assert!(s[650..].iter().all(|x| !(*x >= DRIFT_Z)), "{:?}", &s[645..660]);
+    }
+
+    #[test]
+    fn a_vertical_drag_off_ends_with_the_gps_back_on_the_baro() {
+        // Both levels leave at 0.5 m/s from 40 s (the GPS altitude and its
+        // velocity dragged together); at 100 s the GPS altitude jumps back,
+        // the Doppler integral keeps the 30 m it integrated.
+        let mut d = DriftTest::default();
+        let mut back = vec![];
+        for i in 0..1200 {
+            let t = i as f64 / 10.0;
+            let x = 0.5 * (t - 40.0).clamp(0.0, 60.0);
+            let gps = if t < 100.0 { x } else { 0.0 };
+            let s = d.push(0.1, [gps, x], CRUISE, f64::NAN);
+            if !(s >= DRIFT_Z) {
+                d.learn();
+            }
+            if d.gps_returned() {
+                back.push(t);
+            }
+        }
+        // Reported once, on the fix of the jump.
+        assert_eq!(back.len(), 1, "{back:?}");
+        assert!((back[0] - 100.0).abs() < 1e-9, "{back:?}");
+        assert!(!d.judging);
+    }
+
+    #[test]
+    fn a_gps_only_change_or_opposite_changes_are_not_a_drift() {
+        let mut d = DriftTest::default();
+        let s = run(&mut d, 0.0, 900, 5.0, &|t| [0.5 * t, 0.0]);
+        assert!(s.iter().all(|x| !(*x > 0.0)), "GPS altitude alone moved");
+        let mut d = DriftTest::default();
+        let s = run(&mut d, 0.0, 900, 5.0, &|t| [0.5 * t, -0.5 * t]);
+        assert!(s.iter().all(|x| !(*x > 0.0)), "opposite senses");
+    }
+
+    #[test]
+    fn a_change_the_motion_explains_is_not_a_drift() {
+        // A fixed wing slowing from 20 to 0 m/s over 20 s and landing: its
+        // baro reads 6 m lower against both references (0.015 m/(m/s)²).
+        let at = |t: f64| {
+            let v = (20.0 - (t - 100.0).clamp(0.0, 20.0)).max(0.0);
+            let h = if t < 100.0 { 40.0 } else { (40.0 - 2.0 * (t - 100.0)).max(0.0) };
+            (Motion { speed2: v * v, climb: 0.0, height: h }, 0.015 * v * v)
+        };
+        let mut d = DriftTest::default();
+        let mut worst: f64 = 0.0;
+        for i in 0..1300 {
+            let t = i as f64 / 10.0;
+            let (m, e) = at(t);
+            let s = d.push(0.1, [e, e], m, f64::NAN);
+            worst = worst.max(s.max(0.0));
+            d.learn();
+        }
+        assert!(worst < 1.0, "{worst}");
+        // What the allowance is made of: 0.02 m per (m/s)² of speed
+        // squared, 1 m per m/s of climb, 2 m near the ground.
+        let fast = Motion { speed2: 400.0, climb: 0.0, height: 40.0 };
+        assert!((fast.allowance(&CRUISE) - 6.0).abs() < 1e-12);
+        let landed = Motion { speed2: 0.0, climb: -1.0, height: 0.5 };
+        assert!((fast.allowance(&landed) - (8.0 + 1.0 + 2.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_statistic_does_not_depend_on_the_gps_rate() {
+        let lvl = |t: f64| {
+            let x = 0.3 * (t - 50.0).max(0.0);
+            [x + 0.5 * (t / 7.0).sin(), x]
+        };
+        let at = |hz: f64| {
+            let mut d = DriftTest::default();
+            let n = (80.0 * hz) as usize;
+            *run(&mut d, 0.0, n + 1, hz, &lvl).last().unwrap()
+        };
+        let (a, b) = (at(1.0), at(10.0));
+        assert!(a > 2.0 && (a - b).abs() < 0.05 * a, "1 Hz {a}, 10 Hz {b}");
+    }
+
+    #[test]
+    fn sigma_learns_slowly_and_is_winsorised() {
+        let mut d = DriftTest::default();
+        // A healthy wander of ±0.3 m on both: σ falls to its floors.
+        run(&mut d, 0.0, 6000, 10.0, &|t| [0.3 * (t / 9.0).sin(), 0.3 * (t / 9.0).sin()]);
+        assert_eq!((d.sigma(0), d.sigma(1)), (FLOOR_M[0], FLOOR_M[1]));
+        // One 30 s window of a 20 m change raises the mean square by at
+        // most the winsorised share of one epoch.
+        let before = d.ms;
+        d.pending = Some(Entry { t: d.t + 0.1, level: [20.0; 2], motion: CRUISE });
+        d.last = [20.0, 20.0];
+        d.last_span = SPAN_S;
+        d.learn();
+        for k in 0..2 {
+            let sg2 = before[k].max(FLOOR_M[k] * FLOOR_M[k]);
+            let bound = before[k] + 0.1 / TAU_S * (9.0 * sg2 - before[k]);
+            assert!(d.ms[k] <= bound + 1e-12, "{k}: {} -> {}", before[k], d.ms[k]);
+        }
+    }
+}
+
+/// The snapshot codec of this file's state ([`crate::codec`]).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Motion { speed2, climb, height });
+    impl_codec!(Entry { t, level, motion });
+    impl_codec!(DriftTest { t, ring, ms, pending, last, last_span, dt, motion, claim_v, recent, smooth, judging, returned });
+}
