@@ -51,6 +51,7 @@ use serde::{Deserialize, Serialize};
 use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
 use crate::drift::{DriftTest, Motion};
+use crate::ramp::RampTest;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
@@ -279,6 +280,9 @@ const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a 
 /// The baro drift statistic's scale into the baro group's R: its hold level
 /// (`drift::DRIFT_Z`) lands just above the ANFIS boundary (R ≈ 2.55).
 const DRIFT_R_SCALE: f64 = 2.8 / crate::drift::DRIFT_Z;
+/// The position ramp statistic's scale into the position group's R, the
+/// same way (`ramp::RAMP_Z` just above the boundary).
+const RAMP_R_SCALE: f64 = 2.8 / crate::ramp::RAMP_Z;
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
 const RECOVER_INC: f64 = 2.0;
@@ -765,6 +769,10 @@ struct Consistency {
     /// statistic at the last GPS epoch (NaN when not judged).
     baro_drift: DriftTest,
     drift_stat: f64,
+    /// The position ramping off its velocity track, and its statistic at
+    /// the last GPS epoch (NaN when not judged).
+    ramp: RampTest,
+    ramp_stat: f64,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
     /// vertical velocity up m/s or NaN when it was not trusted).
     baro_epoch: Option<(f64, f64, f64)>,
@@ -1046,6 +1054,8 @@ impl Consistency {
             baro_dop_level: VelocityTrack::default(),
             baro_drift: DriftTest::default(),
             drift_stat: f64::NAN,
+            ramp: RampTest::default(),
+            ramp_stat: f64::NAN,
             baro_epoch: None,
         }
     }
@@ -1134,7 +1144,7 @@ impl Consistency {
         // fix, frozen or zeroed output) would fill the window with its own
         // bias and hold the test up after it clears. The velocity track
         // (`track`) integrates the same velocities, across short gaps too.
-        match (&fix.vel, self.last_gps) {
+        let track_dt = match (&fix.vel, self.last_gps) {
             (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < PV_MAX_DT_S => {
                 if learn_rate {
                     self.rate.observe((pt, pp, pv), t, &y, v);
@@ -1145,20 +1155,35 @@ impl Consistency {
                 // A withheld velocity is suspect: nothing to integrate.
                 if vel_withheld {
                     self.track.clear();
+                    None
                 } else {
                     self.track.step(dtg, y.into(), (*v).into(), pv.into());
+                    Some(dtg)
                 }
             }
             // A dropped record or two: the track integrates across the gap.
             (Some(v), Some((pt, _, pv))) if !vel_withheld && t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S => {
                 ind.clear_pv();
-                self.track.step((t - pt) * self.rate.scale, y.into(), (*v).into(), pv.into());
+                let dt = (t - pt) * self.rate.scale;
+                self.track.step(dt, y.into(), (*v).into(), pv.into());
+                Some(dt)
             }
             _ => {
                 ind.clear_pv();
                 self.track.clear();
+                None
             }
-        }
+        };
+        // The position ramping off its track (see `ramp`).
+        // Not across a fix the receiver calls degraded: its position walks
+        // off by design, and the walk's end would read as a ramp.
+        self.ramp_stat = match (track_dt, self.track.d()) {
+            (Some(dt), Some(d)) if !declared => self.ramp.push(dt, d, fix.eph, fix.epv),
+            _ => {
+                self.ramp.clear();
+                f64::NAN
+            }
+        };
         self.last_gps = fix.vel.map(|v| (t, y, v));
         self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld), fix.epv);
         // Baro against the GPS altitude (up), with the latest baro sample.
@@ -1182,6 +1207,11 @@ impl Consistency {
         // (NaN, not judged, unless both are).
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
         let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
+        let ramp = self.ramp_stat * RAMP_R_SCALE;
+        if ramp.is_finite() && out.r_group[0].is_finite() && ramp > out.r_group[0] {
+            out.r_group[0] = ramp;
+            out.r = out.r.max(ramp);
+        }
         // The baro's drift over a long window, against both (see `drift`).
         let dep = dep.max(self.drift_stat * DRIFT_R_SCALE);
         if dep.is_finite() && out.r_group[2].is_finite() && dep > out.r_group[2] {
@@ -2162,7 +2192,7 @@ impl Detector {
             );
         // The GPS altitude back on the baro's level after a drift the two
         // GPS references shared: a vertical drag-off ended (see `drift`).
-        let gps_back = self.consistency.baro_drift.gps_returned();
+        let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned();
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
@@ -2184,6 +2214,7 @@ impl Detector {
             self.consistency.baro_gps_level.learn();
             self.consistency.baro_dop_level.learn();
             self.consistency.baro_drift.learn();
+            self.consistency.ramp.learn();
         }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
@@ -2927,7 +2958,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, drift_stat, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, drift_stat, ramp, ramp_stat, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

@@ -21,6 +21,7 @@ pub mod frames;
 pub mod indicators;
 pub mod methods;
 pub mod model;
+pub mod ramp;
 pub mod rng;
 pub mod snapshot;
 pub mod thresholds;

@@ -57,8 +57,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// GPS vertical velocity. 9: the receiver's own declaration of a degraded
 /// fix (`kind::DEGRADED`) and the run of usual fixes that lifts it. 10:
 /// the baro's drift test over 30 s against both GPS references
-/// (`drift::DriftTest`).
-pub const VERSION: u32 = 10;
+/// (`drift::DriftTest`). 11: the position's ramp test off its velocity
+/// track (`ramp::RampTest`).
+pub const VERSION: u32 = 11;
 
 #[derive(Clone)]
 struct Header {

@@ -130,6 +130,12 @@ impl VelocityTrack {
         }
     }
 
+    /// `d` (m, NED): the position off its velocity integrated since the
+    /// track began. None before its first step.
+    pub fn d(&self) -> Option<[f64; 3]> {
+        self.d
+    }
+
     /// `d` on the first axis (m): the level a one-axis track follows. None
     /// before its first step.
     pub fn level(&self) -> Option<f64> {

@@ -1,0 +1,47 @@
+//! A slow position ramp (detector/src/ramp.rs): the GPS position walking
+//! off its own velocity track is flagged while it walks, and its end (the
+//! position back on the track from before it) re-anchors the filter rather
+//! than opening a step (issue 14, mechanism 1: "a 1 m/s position ramp with a
+//! truthful GPS velocity is flagged for under 3 s in total").
+#![cfg(not(target_arch = "wasm32"))]
+
+use navguard::battery::{self, Flight, Split};
+use navguard::{Config, Detector};
+
+/// GPS epochs flagged in the `len` s after the flight's first fault ends,
+/// and the GPS epochs in that span.
+fn flagged_after(f: &Flight, len: f64) -> (usize, usize) {
+    let ft = f.faults[0];
+    let mut det = Detector::new(Config::default()).unwrap();
+    let after: Vec<u8> = battery::simulate(f)
+        .iter()
+        .map(|s| (s, det.push(s).unwrap().status))
+        .filter(|(s, _)| !s.label.is_nan() && s.t >= ft.end_log && s.t < ft.end_log + len)
+        .map(|(_, st)| st)
+        .collect();
+    (after.iter().filter(|st| **st != 0).count(), after.len())
+}
+
+/// Regression: tune #197 (survey, 10 Hz GPS, Gauss–Markov σ 0.79 m): a
+/// 0.36 m/s horizontal ramp for 51 s was flagged for 0% of it (the filter
+/// followed it) and its 18 m return was flagged for 60 s as a step.
+#[test]
+fn a_followed_ramp_is_flagged_and_its_return_opens_nothing() {
+    let f = Flight::draw(Split::Tune, 197);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("ramp", battery::Axis::Horizontal));
+    let r = battery::run(&f, &Config::default()).unwrap();
+    assert!(r.events[0].share >= 0.5, "{:.0}% of the ramp flagged", 100.0 * r.events[0].share);
+    let (n, of) = flagged_after(&f, 60.0);
+    assert!(of > 500 && n <= 10, "{n} of {of} epochs flagged in the 60 s after the ramp (was 600)");
+}
+
+/// Regression: tune #186 (survey, 5 Hz GPS, white σ 1.7 m): a drag-off's
+/// end moves the track by 30 m in one fix; the smoothing's rise after that
+/// jump once read as a ramp and flagged the next 80 s.
+#[test]
+fn the_jump_at_a_drag_offs_end_is_not_a_ramp() {
+    let f = Flight::draw(Split::Tune, 186);
+    assert_eq!(f.faults[0].kind.name(), "drag-off");
+    let (n, of) = flagged_after(&f, 90.0);
+    assert!(of > 400 && n * 50 <= of, "{n} of {of} epochs flagged in the 90 s after the drag-off");
+}
