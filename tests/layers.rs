@@ -14,9 +14,9 @@ use std::path::Path;
 /// Modules the core builds on; none may reach a lab module. (The log
 /// readers and the row type are the crate `navguard-logs`, which cannot
 /// import navguard at all: cargo refuses the cycle.)
-const CORE: [&str; 15] = [
-    "anfis", "audit", "codec", "config", "detector", "filter", "frames", "indicators", "methods", "metrics", "model", "rng",
-    "snapshot", "thresholds", "track",
+const CORE: [&str; 17] = [
+    "anfis", "audit", "codec", "config", "detector", "drift", "filter", "frames", "indicators", "methods", "metrics", "model",
+    "ramp", "rng", "snapshot", "thresholds", "track",
 ];
 /// Lab modules: simulators, the method comparison, training, tightly coupled.
 const LAB: [&str; 5] = ["battery", "calibrate", "compare", "sim", "tight"];

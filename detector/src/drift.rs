@@ -97,8 +97,11 @@ const MAX_REF_S: f64 = 120.0;
 /// climb rate (m/s, up), height above the first fix (m).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Motion {
+    /// Horizontal speed squared, m²/s².
     pub speed2: f64,
+    /// Climb rate, m/s (up).
     pub climb: f64,
+    /// Height above the first fix, m.
     pub height: f64,
 }
 
