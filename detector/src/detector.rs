@@ -1203,21 +1203,14 @@ impl Consistency {
         }
         ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
+        // The position ramping off its velocity track (see `ramp`).
+        out.fold(0, self.ramp_stat * RAMP_R_SCALE);
         // The baro's level: condemned only when it left both references
-        // (NaN, not judged, unless both are).
+        // (NaN, not judged, unless both are); and its drift over a long
+        // window, against both (see `drift`).
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
         let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
-        let ramp = self.ramp_stat * RAMP_R_SCALE;
-        if ramp.is_finite() && out.r_group[0].is_finite() && ramp > out.r_group[0] {
-            out.r_group[0] = ramp;
-            out.r = out.r.max(ramp);
-        }
-        // The baro's drift over a long window, against both (see `drift`).
-        let dep = dep.max(self.drift_stat * DRIFT_R_SCALE);
-        if dep.is_finite() && out.r_group[2].is_finite() && dep > out.r_group[2] {
-            out.r_group[2] = dep;
-            out.r = out.r.max(dep);
-        }
+        out.fold(2, dep.max(self.drift_stat * DRIFT_R_SCALE));
         out
     }
 }
@@ -2190,8 +2183,10 @@ impl Detector {
                 self.quality.scale(fix.eph) < QUALITY_DEGRADED,
                 core::array::from_fn(|a| self.ind.sigma(3 + a)),
             );
-        // The GPS altitude back on the baro's level after a drift the two
-        // GPS references shared: a vertical drag-off ended (see `drift`).
+        // The GPS back where it was before a fault the filter had followed:
+        // its altitude on the baro's level after a drift the two GPS
+        // references shared (a vertical drag-off, see `drift`), or its
+        // position on its velocity track after a ramp (see `ramp`).
         let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned();
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);

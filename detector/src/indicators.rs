@@ -286,6 +286,16 @@ impl Indicators {
         }
         best
     }
+
+    /// Fold a test's statistic `x` (already on R's scale) into group `g`'s
+    /// R and into R, where it is larger; a group without data (NaN) stays
+    /// without, and a NaN `x` (the test did not judge) changes nothing.
+    pub fn fold(&mut self, g: usize, x: f64) {
+        if x.is_finite() && self.r_group[g].is_finite() && x > self.r_group[g] {
+            self.r_group[g] = x;
+            self.r = self.r.max(x);
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]

@@ -190,12 +190,17 @@ impl RampTest {
         // and its size against it.
         let ramp = |k: usize| -> f64 {
             let axes: &[usize] = if k == 0 { &[0, 1] } else { &[2] };
-            let full: f64 = axes.iter().map(|&a| (d[a] - e0.d[a]).powi(2)).sum::<f64>().sqrt();
-            let rec: Vec<f64> = axes.iter().map(|&a| (d[a] - r0.d[a]) * scale).collect();
-            let along: f64 = axes.iter().zip(&rec).map(|(&a, r)| r * (d[a] - e0.d[a])).sum::<f64>() / full.max(1e-9);
-            let size: f64 = rec.iter().map(|r| r * r).sum::<f64>().sqrt();
-            if along > 0.0 && size <= MAX_RATIO * full {
-                (full / self.sigma(k)).min(along / self.sigma(k))
+            let (mut full2, mut along, mut rec2) = (0.0, 0.0, 0.0);
+            for &a in axes {
+                let (f, r) = (d[a] - e0.d[a], (d[a] - r0.d[a]) * scale);
+                full2 += f * f;
+                along += r * f;
+                rec2 += r * r;
+            }
+            let full = full2.sqrt();
+            let along = along / full.max(1e-9);
+            if along > 0.0 && rec2.sqrt() <= MAX_RATIO * full {
+                full.min(along) / self.sigma(k)
             } else {
                 0.0
             }
