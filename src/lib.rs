@@ -8,7 +8,7 @@ pub mod audit;
 // The detector and everything its row path runs: crate `navguard-detector`
 // (built at opt-level 3 in the core wasm module while this crate is built
 // for size), re-exported module by module.
-pub use navguard_detector::{anfis, codec, config, detector, drift, error, filter, frames, indicators, methods, model, ramp, rng, snapshot, thresholds, track};
+pub use navguard_detector::{anfis, codec, config, detector, drift, error, filter, frames, indicators, methods, model, ramp, rng, snapshot, thresholds, track, window};
 pub mod battery;
 pub mod calibrate;
 pub mod compare;

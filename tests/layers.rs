@@ -14,9 +14,9 @@ use std::path::Path;
 /// Modules the core builds on; none may reach a lab module. (The log
 /// readers and the row type are the crate `navguard-logs`, which cannot
 /// import navguard at all: cargo refuses the cycle.)
-const CORE: [&str; 17] = [
+const CORE: [&str; 18] = [
     "anfis", "audit", "codec", "config", "detector", "drift", "filter", "frames", "indicators", "methods", "metrics", "model",
-    "ramp", "rng", "snapshot", "thresholds", "track",
+    "ramp", "rng", "snapshot", "thresholds", "track", "window",
 ];
 /// Lab modules: simulators, the method comparison, training, tightly coupled.
 const LAB: [&str; 5] = ["battery", "calibrate", "compare", "sim", "tight"];

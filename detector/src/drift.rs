@@ -24,11 +24,8 @@
 //! falls below `RELEASE_Z`, so an epoch of the drift that dips below the
 //! call does not move the window's start into it): the drift is measured
 //! from the level before it, the episode lasts while the baro is off that
-//! level, and its end (the baro back) restarts the window. The first normal
-//! epoch after another sensor's episode restarts it too (its start may lie
-//! in that fault's unflagged onset). A start older than `MAX_REF_S` is
-//! dropped, so a long episode does not judge the baro against a level from
-//! minutes ago.
+//! level, and its end (the baro back) restarts the window (`window` says
+//! when else it restarts).
 //!
 //! A GPS vertical drag-off (position and velocity moved together) moves
 //! both levels like a baro drift. Its end tells them apart: the GPS
@@ -52,20 +49,16 @@
 //! The GPS altitude's σ is never taken below the receiver's own vertical
 //! accuracy claim (`epv`, else 1.5 × `eph`): a receiver that says its
 //! height is good to 4 m (HDOP 2.8 with 7 satellites on the vibrating
-//! ArduCopter log 8-10, whose GPS altitude fell 19 m over 35 s while the
-//! baro and the throttle say the vehicle stayed low and landed) wanders by
-//! that much over half a minute.
+//! ArduCopter log 8-10, whose GPS altitude fell 19 m against the baro over
+//! the 35 s before its crash) wanders by that much over half a minute.
 //!
-//! Entries are kept at most one per `STEP_S`, so the window's cost and its
-//! statistic do not depend on the GPS rate.
+//! The window, its entries and σ's slow learning are `window`'s, shared
+//! with the position's ramp test (`ramp`).
 use serde::{Deserialize, Serialize};
 
-/// Window, true s.
-pub const SPAN_S: f64 = 30.0;
-/// Spacing of the window's entries, true s.
-const STEP_S: f64 = 1.0;
-/// Time constant of σ's learning, true s.
-const TAU_S: f64 = 120.0;
+pub use crate::window::Motion;
+use crate::window::{learn_ms, Entry, Window, SPAN_S, TAU_S};
+
 /// σ prior and floor per reference (GPS altitude, Doppler integral), m: the
 /// GPS altitude wanders by metres over half a minute; the baro against the
 /// Doppler integral moves with its own error.
@@ -83,42 +76,13 @@ const GROUND_BAND_M: f64 = 5.0;
 pub const DRIFT_Z: f64 = 3.0;
 /// Time constant of the levels' smoothing, true s.
 const SMOOTH_S: f64 = 2.0;
-/// The recent span whose rate must carry the drift too, true s.
-const RECENT_S: f64 = 15.0;
 /// Statistic below which a drift being judged is over.
 const RELEASE_Z: f64 = 2.0;
-/// A gap this long between normal epochs (an episode) restarts the
-/// window, true s.
-const RESTART_S: f64 = 5.0;
-/// Oldest window start kept while no normal epoch comes, true s.
-const MAX_REF_S: f64 = 120.0;
 
-/// The vehicle's motion at an epoch: horizontal speed squared (m²/s²),
-/// climb rate (m/s, up), height above the first fix (m).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct Motion {
-    /// Horizontal speed squared, m²/s².
-    pub speed2: f64,
-    /// Climb rate, m/s (up).
-    pub climb: f64,
-    /// Height above the first fix, m.
-    pub height: f64,
-}
-
-impl Motion {
-    /// How far a healthy baro's error may move between `self` and `o`, m.
-    fn allowance(&self, o: &Motion) -> f64 {
-        let ground = if self.height.min(o.height) < GROUND_BAND_M { GROUND_M } else { 0.0 };
-        K_DYN * (self.speed2 - o.speed2).abs() + K_CLIMB * (self.climb - o.climb).abs() + ground
-    }
-}
-
-/// One window entry: true s, both levels (m), the motion.
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
-struct Entry {
-    t: f64,
-    level: [f64; 2],
-    motion: Motion,
+/// How far a healthy baro's error may move between motions `a` and `b`, m.
+fn allowance(a: &Motion, b: &Motion) -> f64 {
+    let ground = if a.height.min(b.height) < GROUND_BAND_M { GROUND_M } else { 0.0 };
+    K_DYN * (a.speed2 - b.speed2).abs() + K_CLIMB * (a.climb - b.climb).abs() + ground
 }
 
 /// See the module docs. Levels in m, times in true s.
@@ -126,8 +90,8 @@ struct Entry {
 pub struct DriftTest {
     /// True time since the test began, s.
     t: f64,
-    /// Entries of normal epochs, oldest first, spaced by at least `STEP_S`.
-    ring: Vec<Entry>,
+    /// Both levels (the first two components of each entry).
+    window: Window,
     /// Learnt mean square of the window change per reference (net of the
     /// motion allowance), m²; 0 before the first (the prior then applies).
     ms: [f64; 2],
@@ -145,9 +109,6 @@ pub struct DriftTest {
     /// The receiver's vertical accuracy claim at the last epoch, m (NaN
     /// when it makes none): the GPS altitude's σ is not taken below it.
     claim_v: f64,
-    /// Every epoch's entry over the last `RECENT_S`, at most one per
-    /// `STEP_S` (normal or not).
-    recent: Vec<Entry>,
     /// The levels smoothed over `SMOOTH_S` (m); None before the first.
     smooth: Option<[f64; 2]>,
     /// A drift is being judged (see the module docs).
@@ -160,9 +121,9 @@ pub struct DriftTest {
 /// The change of both levels from `a` to `b` times `scale`, net of the
 /// motion allowance (its sign kept, 0 inside the allowance).
 fn net_change(a: &Entry, b: &Entry, scale: f64) -> [f64; 2] {
-    let allow = b.motion.allowance(&a.motion);
+    let allow = allowance(&b.motion, &a.motion);
     core::array::from_fn(|k| {
-        let s = (b.level[k] - a.level[k]) * scale;
+        let s = (b.x[k] - a.x[k]) * scale;
         s.signum() * (s.abs() - allow).max(0.0)
     })
 }
@@ -208,27 +169,22 @@ impl DriftTest {
         // receiver's white noise (1–2 m at 5 Hz), which a ramp's change
         // over the window does not need to compete with.
         let w = (dt / SMOOTH_S).min(1.0);
-        let raw = Entry { t, level, motion };
+        let raw = Entry { t, x: [level[0], level[1], 0.0], motion };
         let level = match self.smooth {
             Some(p) => core::array::from_fn(|k| p[k] + w * (level[k] - p[k])),
             None => level,
         };
         self.smooth = Some(level);
-        let e = Entry { t, level, motion };
+        let e = Entry { t, x: [level[0], level[1], 0.0], motion };
         self.pending = Some(e);
-        self.note_recent(e);
-        if self.ring.first().is_some_and(|e| t - e.t > MAX_REF_S) {
-            self.ring.clear();
-        }
-        let Some(e0) = self.ring.first().filter(|e| t - e.t >= SPAN_S).copied() else {
+        let (Some(e0), r0) = self.window.note(e) else {
             return f64::NAN;
         };
         self.last_span = t - e0.t;
         self.last = net_change(&e0, &e, 1.0);
         // The recent change, scaled to the window (what the rate of the
         // last `RECENT_S` gives over `SPAN_S`).
-        let r0 = self.recent[0];
-        let recent = if t - r0.t >= 0.5 * RECENT_S { net_change(&r0, &e, SPAN_S / (t - r0.t)) } else { [f64::NAN; 2] };
+        let recent = r0.map_or([f64::NAN; 2], |r0| net_change(&r0, &e, SPAN_S / (t - r0.t)));
         let z: [f64; 2] = core::array::from_fn(|k| self.last[k].abs() / self.sigma(k));
         let full = if self.last[0] * self.last[1] > 0.0 { z[0].min(z[1]) } else { 0.0 };
         if self.judging {
@@ -240,8 +196,8 @@ impl DriftTest {
             if full < RELEASE_Z || (z_raw < RELEASE_Z && z[1] >= DRIFT_Z) {
                 self.judging = false;
                 self.returned = z_raw.min(z[0]) < RELEASE_Z && z[1] >= DRIFT_Z;
-                self.ring.clear();
-                self.smooth = Some(raw.level);
+                self.window.restart();
+                self.smooth = Some([raw.x[0], raw.x[1]]);
                 return full.min(z_raw);
             }
             return full;
@@ -253,17 +209,6 @@ impl DriftTest {
         stat
     }
 
-    /// Keep one entry per `STEP_S` of every epoch (normal or not) over the
-    /// last `RECENT_S`: the start of the recent change.
-    fn note_recent(&mut self, e: Entry) {
-        if self.recent.last().is_none_or(|l| e.t - l.t >= STEP_S) {
-            self.recent.push(e);
-        }
-        while self.recent.len() > 2 && e.t - self.recent[1].t >= RECENT_S {
-            self.recent.remove(0);
-        }
-    }
-
     /// This epoch ended a drift with the GPS altitude back on the baro's
     /// level from before it and the Doppler integral still off: a GPS
     /// vertical drag-off's end (see the module docs).
@@ -271,34 +216,19 @@ impl DriftTest {
         self.returned
     }
 
-    /// The last epoch was normal: its entry enters the window (at most one
-    /// per `STEP_S`; the start kept is the newest at least `SPAN_S` old),
-    /// and σ learns from its change (winsorised at 3σ) when the change
-    /// spans about `SPAN_S`.
+    /// The last epoch was normal: its entry enters the window (see
+    /// `window::Window::enter`), and σ learns from its change when it spans
+    /// about `SPAN_S`.
     pub fn learn(&mut self) {
         let Some(e) = self.pending.take().filter(|_| !self.judging) else { return };
-        let t = e.t;
-        if self.ring.last().is_some_and(|l| t - l.t > RESTART_S) {
-            // The first normal epoch after an episode: the window restarts,
-            // as its start may sit inside the fault's unflagged onset.
-            self.ring.clear();
-        }
-        if self.ring.last().is_none_or(|l| t - l.t >= STEP_S) {
-            self.ring.push(e);
-        }
-        while self.ring.len() > 2 && t - self.ring[1].t >= SPAN_S {
-            self.ring.remove(0);
-        }
+        self.window.enter(e);
         if !(self.last_span <= 1.5 * SPAN_S) {
             return;
         }
         let w = (self.dt / TAU_S).min(1.0);
         for k in 0..2 {
-            let s = self.last[k];
-            if s.is_finite() {
-                let sg = self.sigma(k);
-                let ms = if self.ms[k] > 0.0 { self.ms[k] } else { sg * sg };
-                self.ms[k] = ms + w * ((s * s).min(9.0 * sg * sg) - ms);
+            if self.last[k].is_finite() {
+                self.ms[k] = learn_ms(self.ms[k], self.last[k], self.sigma(k), w);
             }
         }
     }
@@ -403,9 +333,9 @@ mod tests {
         // What the allowance is made of: 0.02 m per (m/s)² of speed
         // squared, 1 m per m/s of climb, 2 m near the ground.
         let fast = Motion { speed2: 400.0, climb: 0.0, height: 40.0 };
-        assert!((fast.allowance(&CRUISE) - 6.0).abs() < 1e-12);
+        assert!((allowance(&fast, &CRUISE) - 6.0).abs() < 1e-12);
         let landed = Motion { speed2: 0.0, climb: -1.0, height: 0.5 };
-        assert!((fast.allowance(&landed) - (8.0 + 1.0 + 2.0)).abs() < 1e-12);
+        assert!((allowance(&fast, &landed) - (8.0 + 1.0 + 2.0)).abs() < 1e-12);
     }
 
     #[test]
@@ -432,7 +362,7 @@ mod tests {
         // One 30 s window of a 20 m change raises the mean square by at
         // most the winsorised share of one epoch.
         let before = d.ms;
-        d.pending = Some(Entry { t: d.t + 0.1, level: [20.0; 2], motion: CRUISE });
+        d.pending = Some(Entry { t: d.t + 0.1, x: [20.0, 20.0, 0.0], motion: CRUISE });
         d.last = [20.0, 20.0];
         d.last_span = SPAN_S;
         d.learn();
@@ -449,7 +379,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(Motion { speed2, climb, height });
-    impl_codec!(Entry { t, level, motion });
-    impl_codec!(DriftTest { t, ring, ms, pending, last, last_span, dt, motion, claim_v, recent, smooth, judging, returned });
+    impl_codec!(DriftTest { t, window, ms, pending, last, last_span, dt, motion, claim_v, smooth, judging, returned });
 }

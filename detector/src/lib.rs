@@ -26,6 +26,7 @@ pub mod rng;
 pub mod snapshot;
 pub mod thresholds;
 pub mod track;
+pub mod window;
 
 pub use navguard_logs as logs;
 pub use navguard_logs::sample;

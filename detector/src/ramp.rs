@@ -16,7 +16,7 @@
 //! `SMOOTH_S`) over the last `SPAN_S`, horizontal and vertical apart, over
 //! a σ learnt slowly from a prior and never below the receiver's accuracy
 //! claim. A ramp is called only when it is one: the change over the last
-//! `RECENT_S`, scaled to the window, points the same way and is no more than
+//! `RECENT_S` (see `window`), scaled to the window, points the same way and is no more than
 //! `MAX_RATIO` times the window's change (a jump inside the last `RECENT_S`
 //! gives twice the window's change at that scale; a ramp that has filled
 //! the window gives the window's change). Once called, the window's start
@@ -26,18 +26,12 @@
 //! it rather than reading it as a step.
 use serde::{Deserialize, Serialize};
 
-/// Window, true s.
-const SPAN_S: f64 = 30.0;
-/// The recent span, true s.
-const RECENT_S: f64 = 15.0;
+use crate::window::{learn_ms, Entry, Window, SPAN_S, TAU_S};
+
 /// Largest recent-to-window ratio of a ramp (a jump gives 2).
 const MAX_RATIO: f64 = 1.6;
-/// Spacing of entries, true s.
-const STEP_S: f64 = 1.0;
 /// Smoothing of `d`, true s.
 const SMOOTH_S: f64 = 2.0;
-/// Time constant of σ's learning, true s.
-const TAU_S: f64 = 120.0;
 /// σ prior and floor, horizontal (norm of N, E) and vertical, m.
 const SIGMA0_M: [f64; 2] = [2.0, 3.0];
 const FLOOR_M: [f64; 2] = [1.0, 1.5];
@@ -57,27 +51,14 @@ const DEV0_M: f64 = 1.0;
 /// after its 11 s outage at 79-90 s: 6 m in 20 s at 9 satellites, HDOP
 /// 1.8, which the autopilot's EKF accepted).
 const SETTLE_S: f64 = 30.0;
-/// A gap this long between normal epochs restarts the window, true s.
-const RESTART_S: f64 = 5.0;
-/// Oldest window start kept, true s.
-const MAX_REF_S: f64 = 120.0;
-
-/// One window entry: true s, `d` smoothed (m, NED).
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
-struct Entry {
-    t: f64,
-    d: [f64; 3],
-}
 
 /// See the module docs. Positions in m (NED), times in true s.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RampTest {
     t: f64,
     smooth: Option<[f64; 3]>,
-    /// Normal epochs' entries, oldest first, at least `STEP_S` apart.
-    ring: Vec<Entry>,
-    /// Every epoch's entries over the last `RECENT_S`.
-    recent: Vec<Entry>,
+    /// `d` smoothed (the entries' three components).
+    window: Window,
     pending: Option<Entry>,
     /// Learnt mean square of the window change, horizontal (both axes
     /// summed) and vertical, m²; 0 before any (the prior applies).
@@ -150,41 +131,31 @@ impl RampTest {
         if self.dev > JUMP_Z * usual && self.dev > JUMP_MIN_M {
             self.jump_t = Some(t);
         }
-        let e = Entry { t, d };
+        let e = Entry { t, x: d, ..Entry::default() };
         self.pending = Some(e);
-        if self.recent.last().is_none_or(|l| t - l.t >= STEP_S) {
-            self.recent.push(e);
-        }
-        while self.recent.len() > 2 && t - self.recent[1].t >= RECENT_S {
-            self.recent.remove(0);
-        }
-        if self.ring.first().is_some_and(|e| t - e.t > MAX_REF_S) {
-            self.ring.clear();
-        }
-        let Some(e0) = self.ring.first().filter(|e| t - e.t >= SPAN_S).copied() else {
+        let (Some(e0), r0) = self.window.note(e) else {
             return f64::NAN;
         };
         self.last_span = t - e0.t;
-        self.last = split(&e0.d, &d);
+        self.last = split(&e0.x, &d);
         let z: [f64; 2] = core::array::from_fn(|k| self.last[k] / self.sigma(k));
         if self.judging {
             // The return is one jump: read on this fix, not on the smoothing.
-            let zr = split(&e0.d, &raw);
+            let zr = split(&e0.x, &raw);
             let z_raw = (zr[0] / self.sigma(0)).max(zr[1] / self.sigma(1));
             let full = z[0].max(z[1]);
             if full.min(z_raw) < RELEASE_Z {
                 self.judging = false;
                 self.returned = true;
-                self.ring.clear();
+                self.window.restart();
                 self.smooth = Some(raw);
                 return full.min(z_raw);
             }
             return full;
         }
-        let r0 = self.recent[0];
-        if t - r0.t < 0.5 * RECENT_S || self.jumped() || t < SETTLE_S + SPAN_S {
+        let Some(r0) = r0.filter(|_| !self.jumped() && t >= SETTLE_S + SPAN_S) else {
             return 0.0;
-        }
+        };
         let scale = SPAN_S / (t - r0.t);
         // Per group: the recent change (scaled) along the window's change
         // and its size against it.
@@ -192,7 +163,7 @@ impl RampTest {
             let axes: &[usize] = if k == 0 { &[0, 1] } else { &[2] };
             let (mut full2, mut along, mut rec2) = (0.0, 0.0, 0.0);
             for &a in axes {
-                let (f, r) = (d[a] - e0.d[a], (d[a] - r0.d[a]) * scale);
+                let (f, r) = (d[a] - e0.x[a], (d[a] - r0.x[a]) * scale);
                 full2 += f * f;
                 along += r * f;
                 rec2 += r * r;
@@ -222,33 +193,21 @@ impl RampTest {
     }
 
     /// The last epoch was normal: its entry enters the window (see
-    /// `drift::DriftTest::learn`), and σ learns from its change.
+    /// `window::Window::enter`), and σ learns from its change.
     pub fn learn(&mut self) {
         let Some(e) = self.pending.take().filter(|_| !self.judging) else { return };
-        let t = e.t;
-        if self.ring.last().is_some_and(|l| t - l.t > RESTART_S) {
-            self.ring.clear();
-        }
-        if self.ring.last().is_none_or(|l| t - l.t >= STEP_S) {
-            self.ring.push(e);
-        }
-        while self.ring.len() > 2 && t - self.ring[1].t >= SPAN_S {
-            self.ring.remove(0);
-        }
+        self.window.enter(e);
         let w = (self.dt / TAU_S).min(1.0);
         if self.dev.is_finite() && self.jump_t != Some(self.t) {
-            let u = if self.dev_ms > 0.0 { self.dev_ms } else { DEV0_M * DEV0_M };
-            self.dev_ms = u + w * (self.dev * self.dev).min(9.0 * u) - w * u;
+            let usual = if self.dev_ms > 0.0 { self.dev_ms.sqrt() } else { DEV0_M };
+            self.dev_ms = learn_ms(self.dev_ms, self.dev, usual, w);
         }
         if !(self.last_span <= 1.5 * SPAN_S) || self.jumped() {
             return;
         }
         for k in 0..2 {
-            let s = self.last[k];
-            if s.is_finite() {
-                let sg = self.sigma(k);
-                let ms = if self.ms[k] > 0.0 { self.ms[k] } else { sg * sg };
-                self.ms[k] = ms + w * ((s * s).min(9.0 * sg * sg) - ms);
+            if self.last[k].is_finite() {
+                self.ms[k] = learn_ms(self.ms[k], self.last[k], self.sigma(k), w);
             }
         }
     }
@@ -333,6 +292,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(Entry { t, d });
-    impl_codec!(RampTest { t, smooth, ring, recent, pending, ms, last, last_span, dt, claim, judging, returned, dev_ms, dev, jump_t });
+    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, judging, returned, dev_ms, dev, jump_t });
 }

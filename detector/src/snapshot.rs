@@ -58,8 +58,8 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// fix (`kind::DEGRADED`) and the run of usual fixes that lifts it. 10:
 /// the baro's drift test over 30 s against both GPS references
 /// (`drift::DriftTest`). 11: the position's ramp test off its velocity
-/// track (`ramp::RampTest`).
-pub const VERSION: u32 = 11;
+/// track (`ramp::RampTest`). 12: the two share one window (`window::Window`).
+pub const VERSION: u32 = 12;
 
 #[derive(Clone)]
 struct Header {

@@ -1,0 +1,164 @@
+//! The window the two slow tests share: the baro's drift (`drift`) and the
+//! position's ramp (`ramp`).
+//!
+//! Each judges the change of a smoothed level over the last `SPAN_S` (true
+//! time) against the level at the window's start, and the change over the
+//! last `RECENT_S` for its rate. The start is kept from normal epochs only
+//! (`enter`), so while a fault is flagged it stays on the level from before
+//! the fault; the first normal epoch after a gap of `RESTART_S` (another
+//! sensor's episode) restarts it, as its start may sit in that fault's
+//! unflagged onset; a start older than `MAX_REF_S` is dropped, so a long
+//! episode does not judge the level against one from minutes ago. The
+//! recent span takes every epoch (`note`). Entries are kept at most one per
+//! `STEP_S`, so the cost and the statistics do not depend on the GPS rate.
+//!
+//! Their σ are learnt the same way too (`learn_ms`): slowly, from a prior,
+//! winsorised at 3σ, so a fault growing inside the window cannot teach it
+//! its own size.
+use serde::{Deserialize, Serialize};
+
+/// The window, true s.
+pub const SPAN_S: f64 = 30.0;
+/// The recent span, true s.
+pub const RECENT_S: f64 = 15.0;
+/// Time constant of σ's learning, true s.
+pub const TAU_S: f64 = 120.0;
+/// Spacing of entries, true s.
+const STEP_S: f64 = 1.0;
+/// A gap this long between normal epochs restarts the window, true s.
+const RESTART_S: f64 = 5.0;
+/// Oldest window start kept while no normal epoch comes, true s.
+const MAX_REF_S: f64 = 120.0;
+
+/// The vehicle's motion at an epoch (what the baro's healthy error moves
+/// with; see `drift`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Motion {
+    /// Horizontal speed squared, m²/s².
+    pub speed2: f64,
+    /// Climb rate, m/s (up).
+    pub climb: f64,
+    /// Height above the first fix, m.
+    pub height: f64,
+}
+
+/// One entry: true s, the level's components (m), the motion.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub struct Entry {
+    /// True time, s.
+    pub t: f64,
+    /// The level (m): up to three components, unused ones 0.
+    pub x: [f64; 3],
+    /// The motion at that epoch.
+    pub motion: Motion,
+}
+
+/// See the module docs.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Window {
+    /// Normal epochs' entries, oldest first.
+    ring: Vec<Entry>,
+    /// Every epoch's entries over the last `RECENT_S`.
+    recent: Vec<Entry>,
+}
+
+/// Append `e` if it is `STEP_S` past the last entry, then drop the oldest
+/// while the next one is at least `span` old.
+fn keep(v: &mut Vec<Entry>, e: Entry, span: f64) {
+    if v.last().is_none_or(|l| e.t - l.t >= STEP_S) {
+        v.push(e);
+    }
+    while v.len() > 2 && e.t - v[1].t >= span {
+        v.remove(0);
+    }
+}
+
+impl Window {
+    /// Empty both spans (the level restarted).
+    pub fn clear(&mut self) {
+        self.ring.clear();
+        self.recent.clear();
+    }
+
+    /// A fresh window start (a fault judged on it is over).
+    pub fn restart(&mut self) {
+        self.ring.clear();
+    }
+
+    /// Every epoch: `e` joins the recent span. Returns the window's start
+    /// when it is at least `SPAN_S` old, and the recent span's start when
+    /// it is at least half of `RECENT_S` old.
+    pub fn note(&mut self, e: Entry) -> (Option<Entry>, Option<Entry>) {
+        keep(&mut self.recent, e, RECENT_S);
+        if self.ring.first().is_some_and(|s| e.t - s.t > MAX_REF_S) {
+            self.ring.clear();
+        }
+        let start = self.ring.first().filter(|s| e.t - s.t >= SPAN_S).copied();
+        let recent = self.recent.first().filter(|r| e.t - r.t >= 0.5 * RECENT_S).copied();
+        (start, recent)
+    }
+
+    /// A normal epoch's entry joins the window.
+    pub fn enter(&mut self, e: Entry) {
+        if self.ring.last().is_some_and(|l| e.t - l.t > RESTART_S) {
+            self.ring.clear();
+        }
+        keep(&mut self.ring, e, SPAN_S);
+    }
+}
+
+/// One learning step of a mean square: `ms` (0 before any: the current σ
+/// `sg` stands in), from a change `s`, winsorised at 3σ, with weight `w`.
+pub fn learn_ms(ms: f64, s: f64, sg: f64, w: f64) -> f64 {
+    let ms = if ms > 0.0 { ms } else { sg * sg };
+    ms + w * ((s * s).min(9.0 * sg * sg) - ms)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(t: f64, x: f64) -> Entry {
+        Entry { t, x: [x, 0.0, 0.0], motion: Motion::default() }
+    }
+
+    #[test]
+    fn the_start_is_the_newest_normal_entry_a_span_old_and_restarts_after_a_gap() {
+        let mut w = Window::default();
+        for i in 0..=400 {
+            let e = at(i as f64 * 0.1, i as f64);
+            w.note(e);
+            w.enter(e);
+        }
+        // At 40 s: the start is 30 s back (entries are a second apart).
+        let (start, recent) = w.note(at(40.1, 0.0));
+        assert_eq!(start.map(|s| s.t), Some(10.0));
+        assert_eq!(recent.map(|r| r.t), Some(25.0));
+        // No normal epoch for 20 s: the start stays; the first normal one
+        // after the gap restarts the window.
+        let (start, _) = w.note(at(60.0, 0.0));
+        assert_eq!(start.map(|s| s.t), Some(10.0));
+        w.enter(at(60.0, 0.0));
+        assert_eq!(w.note(at(60.1, 0.0)).0.map(|s| s.t), None);
+        // A start older than MAX_REF_S is dropped.
+        let mut w = Window::default();
+        w.enter(at(0.0, 0.0));
+        assert!(w.note(at(119.0, 0.0)).0.is_some() && w.note(at(121.0, 0.0)).0.is_none());
+    }
+
+    #[test]
+    fn learning_is_winsorised_at_three_sigma() {
+        assert!((learn_ms(0.0, 1.0, 2.0, 0.5) - (4.0 + 0.5 * (1.0 - 4.0))).abs() < 1e-12);
+        assert!((learn_ms(4.0, 100.0, 2.0, 0.1) - (4.0 + 0.1 * (36.0 - 4.0))).abs() < 1e-12);
+    }
+}
+
+/// The snapshot codec of this file's state ([`crate::codec`]).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Motion { speed2, climb, height });
+    impl_codec!(Entry { t, x, motion });
+    impl_codec!(Window { ring, recent });
+}
