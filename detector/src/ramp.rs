@@ -81,9 +81,13 @@ pub struct RampTest {
     jump_t: Option<f64>,
 }
 
-/// Horizontal norm and vertical magnitude of `b − a`.
+/// Horizontal norm and vertical magnitude of `b − a`. The norm is a plain
+/// square root, not `hypot`: the platform's `hypot` (glibc natively, the
+/// libm crate in wasm) may differ in the last bit, and verdicts must be the
+/// same bits everywhere (`tests/node/determinism.test.mjs`).
 fn split(a: &[f64; 3], b: &[f64; 3]) -> [f64; 2] {
-    [(b[0] - a[0]).hypot(b[1] - a[1]), (b[2] - a[2]).abs()]
+    let (n, e) = (b[0] - a[0], b[1] - a[1]);
+    [(n * n + e * e).sqrt(), (b[2] - a[2]).abs()]
 }
 
 impl RampTest {
