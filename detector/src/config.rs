@@ -368,37 +368,74 @@ mod plain {
             Data::U(u) => format!("integer `{u}`"),
             Data::I(i) => format!("integer `{i}`"),
             Data::F(x) => format!("floating point `{}`", float_text(*x)),
-            Data::Str(s) => format!("string {s:?}"),
+            // serde_json writes `{s:?}`; `quoted` is the same below U+0100
+            // without std's Unicode tables (see `navguard_logs::text`).
+            Data::Str(s) => format!("string {}", navguard_logs::text::quoted(s)),
             Data::Arr(_) => "sequence".into(),
             Data::Obj(_) => "map".into(),
         }
     }
     /// A float as serde_json writes it in messages: the shortest digits,
     /// fixed for decimal exponents -5..=15 (`1000.0`, `0.00001`), else
-    /// `1.5e+16`, `1e-7`.
+    /// `1.5e+16`, `1e-7`. Built from bytes: str slicing's panic path would
+    /// bring std's Unicode tables into the core module.
     #[inline]
     fn float_text(x: f64) -> String {
+        // `{:e}` of |x|: the shortest digits, a dot after the first, `e`,
+        // the exponent.
         let sci = format!("{:e}", x.abs());
-        let (mant, exp) = sci.split_once('e').unwrap_or((&sci, "0"));
-        let exp: i32 = exp.parse().unwrap_or(0);
-        let digits: String = mant.chars().filter(char::is_ascii_digit).collect();
+        let mut digits = Vec::new();
+        let mut exp = 0i32;
+        let mut bytes = sci.bytes();
+        for b in bytes.by_ref() {
+            match b {
+                b'0'..=b'9' => digits.push(b),
+                b'e' => break,
+                _ => {}
+            }
+        }
+        let mut negative_exp = false;
+        for b in bytes {
+            match b {
+                b'0'..=b'9' => exp = exp * 10 + i32::from(b - b'0'),
+                _ => negative_exp = true,
+            }
+        }
+        if negative_exp {
+            exp = -exp;
+        }
         let n = digits.len() as i32;
-        let sign = if x.is_sign_negative() { "-" } else { "" };
-        let body = if (-5..=15).contains(&exp) {
+        let mut out = String::new();
+        if x.is_sign_negative() {
+            out.push('-');
+        }
+        let zeros = |out: &mut String, k: i32| (0..k).for_each(|_| out.push('0'));
+        let push = |out: &mut String, d: &[u8]| d.iter().for_each(|&b| out.push(b as char));
+        if (-5..=15).contains(&exp) {
             if n - 1 <= exp {
-                format!("{digits}{}.0", "0".repeat((exp - (n - 1)) as usize))
+                push(&mut out, &digits);
+                zeros(&mut out, exp - (n - 1));
+                out.push_str(".0");
             } else if exp >= 0 {
                 let (a, b) = digits.split_at(exp as usize + 1);
-                format!("{a}.{b}")
+                push(&mut out, a);
+                out.push('.');
+                push(&mut out, b);
             } else {
-                format!("0.{}{digits}", "0".repeat((-exp - 1) as usize))
+                out.push_str("0.");
+                zeros(&mut out, -exp - 1);
+                push(&mut out, &digits);
             }
         } else {
-            let (a, b) = digits.split_at(1);
-            let dot = if b.is_empty() { String::new() } else { format!(".{b}") };
-            format!("{a}{dot}e{}{}", if exp >= 0 { "+" } else { "-" }, exp.abs())
-        };
-        format!("{sign}{body}")
+            push(&mut out, &digits[..1]);
+            if n > 1 {
+                out.push('.');
+                push(&mut out, &digits[1..]);
+            }
+            out.push_str(if exp >= 0 { "e+" } else { "e-" });
+            out.push_str(&exp.abs().to_string());
+        }
+        out
     }
 
     #[inline]
