@@ -342,7 +342,10 @@ impl Tally {
             warnings.push(format!("{bad_rows} bad rows skipped in all"));
         }
         let st = det.stats();
-        if st.gps_epochs == 0 && !warnings.iter().any(|w| w.contains("GPS unavailable")) {
+        // Every such warning starts so (the readers' and ours); `contains`
+        // would bring in str slicing's panic path and, through it, std's
+        // Unicode tables (see `navguard_logs::text`).
+        if st.gps_epochs == 0 && !warnings.iter().any(|w| w.starts_with("GPS unavailable")) {
             warnings.push(if missing.iter().any(|m| m == "gps") {
                 "GPS unavailable: the log has no GPS data; no residual-based verdicts were made".into()
             } else {

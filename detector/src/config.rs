@@ -203,32 +203,118 @@ impl ConfigInput {
         Self::from_value(v)
     }
 
-    /// Check a config given as JSON data (the wasm facade copies a JS
-    /// object into this form first, reading every field once). Each field
-    /// is read by hand ([`input_of`]), not by serde's derive: the core wasm
-    /// module then carries no deserializer; the messages are serde's.
-    #[inline]
+    /// Check a config given as serde_json data: the same reader as
+    /// [`ConfigInput::from_data`], over the same data.
     pub fn from_value(v: serde_json::Value) -> Result<Config, ConfigError> {
-        let serde_json::Value::Object(map) = v else {
+        Self::from_data(Data::from(v))
+    }
+
+    /// Check a config given as plain data (the wasm facade copies a JS
+    /// object into this form first, reading every field once). Each field
+    /// is read by hand ([`input_of`]), not by serde's derive, and from
+    /// [`Data`], not serde_json's `Value`: the core wasm module then carries
+    /// neither a deserializer nor serde_json's value type and map (about
+    /// 14 KB); the messages are serde's. An object's fields are taken in
+    /// key order, as serde_json's map holds them.
+    #[inline]
+    pub fn from_data(v: Data) -> Result<Config, ConfigError> {
+        let Data::Obj(mut fields) = v else {
             return Err(ConfigError::new("", "must be a JSON object"));
         };
-        input_of(&map)?.check()
+        by_key(&mut fields);
+        input_of(&fields)?.check()
     }
 }
 
-/// The [`ConfigInput`] that `map` spells: each field `null` or absent for
-/// the default, else of its type. Fields are taken in the map's (key)
-/// order, each name checked then its value, so with several bad fields the
-/// first reported is the one serde reported; a type error names its field,
-/// with serde_json's message for it.
+/// JSON-like data, as the config reader takes it: what JSON text or a JS
+/// object holds. Numbers keep serde_json's three classes, which its
+/// messages name ("integer `5`", "floating point `5.5`").
+#[derive(Clone, Debug, PartialEq)]
+pub enum Data {
+    /// `null`.
+    Null,
+    /// `true` / `false`.
+    Bool(bool),
+    /// A non-negative integer.
+    U(u64),
+    /// A negative integer.
+    I(i64),
+    /// Any other (finite) number.
+    F(f64),
+    /// A string.
+    Str(String),
+    /// An array.
+    Arr(Vec<Data>),
+    /// An object's fields (a name at most once).
+    Obj(Vec<(String, Data)>),
+}
+
+impl Data {
+    #[inline]
+    fn as_f64(&self) -> Option<f64> {
+        match *self {
+            Data::U(u) => Some(u as f64),
+            Data::I(i) => Some(i as f64),
+            Data::F(x) => Some(x),
+            _ => None,
+        }
+    }
+
+    /// Field `key` of an object (`None` for an absent field or a non-object).
+    #[inline]
+    fn get(&self, key: &str) -> Option<&Data> {
+        let Data::Obj(fields) = self else { return None };
+        fields.iter().find(|(k, _)| k == key).map(|(_, v)| v)
+    }
+}
+
+/// serde_json's data as [`Data`] (its map is already in key order).
+impl From<serde_json::Value> for Data {
+    fn from(v: serde_json::Value) -> Data {
+        use serde_json::Value;
+        match v {
+            Value::Null => Data::Null,
+            Value::Bool(b) => Data::Bool(b),
+            Value::Number(n) => match (n.as_u64(), n.as_i64()) {
+                (Some(u), _) => Data::U(u),
+                (_, Some(i)) => Data::I(i),
+                _ => Data::F(n.as_f64().unwrap_or(f64::NAN)),
+            },
+            Value::String(s) => Data::Str(s),
+            Value::Array(a) => Data::Arr(a.into_iter().map(Data::from).collect()),
+            Value::Object(m) => Data::Obj(m.into_iter().map(|(k, v)| (k, Data::from(v))).collect()),
+        }
+    }
+}
+
+/// Sort an object's fields by name, as serde_json's map iterates them. An
+/// insertion sort: a config has at most 16 known fields (the first unknown
+/// one is an error), and input already in order (serde_json's) costs one
+/// pass; std's sort would add its code to the core module for that.
 #[inline]
-fn input_of(map: &serde_json::Map<String, serde_json::Value>) -> Result<ConfigInput, ConfigError> {
+fn by_key(fields: &mut [(String, Data)]) {
+    for i in 1..fields.len() {
+        let mut j = i;
+        while j > 0 && fields[j - 1].0 > fields[j].0 {
+            fields.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+}
+
+/// The [`ConfigInput`] that `fields` (in key order) spell: each field `null`
+/// or absent for the default, else of its type. Fields are taken in order,
+/// each name checked then its value, so with several bad fields the first
+/// reported is the one serde reported; a type error names its field, with
+/// serde_json's message for it.
+#[inline]
+fn input_of(fields: &[(String, Data)]) -> Result<ConfigInput, ConfigError> {
     use plain::*;
     let mut input = ConfigInput::default();
     let i = &mut input;
-    for (k, v) in map {
+    for (k, v) in fields {
         ConfigInput::check_field_name(k)?;
-        if v.is_null() {
+        if matches!(v, Data::Null) {
             continue;
         }
         let e = |m| ConfigError::new(k.as_str(), m);
@@ -266,83 +352,122 @@ fn input_of(map: &serde_json::Map<String, serde_json::Value>) -> Result<ConfigIn
     Ok(input)
 }
 
-/// JSON data read into the config's types by hand, with the messages
+/// Plain data read into the config's types by hand, with the messages
 /// serde_json gives for the same data (a test holds them to serde's).
 mod plain {
-    use serde_json::Value;
-
+    use super::Data;
     use crate::anfis::Anfis;
     use crate::model::Model;
 
     /// How serde_json names a value it did not expect.
     #[inline]
-    fn unexpected(v: &Value) -> String {
+    fn unexpected(v: &Data) -> String {
         match v {
-            Value::Null => "null".into(),
-            Value::Bool(b) => format!("boolean `{b}`"),
-            Value::Number(n) => match (n.as_u64(), n.as_i64(), n.as_f64()) {
-                (Some(u), _, _) => format!("integer `{u}`"),
-                (_, Some(i), _) => format!("integer `{i}`"),
-                (_, _, x) => format!("floating point `{}`", float_text(x.unwrap_or(f64::NAN))),
-            },
-            Value::String(s) => format!("string {s:?}"),
-            Value::Array(_) => "sequence".into(),
-            Value::Object(_) => "map".into(),
+            Data::Null => "null".into(),
+            Data::Bool(b) => format!("boolean `{b}`"),
+            Data::U(u) => format!("integer `{u}`"),
+            Data::I(i) => format!("integer `{i}`"),
+            Data::F(x) => format!("floating point `{}`", float_text(*x)),
+            // serde_json writes `{s:?}`; `quoted` is the same below U+0100
+            // without std's Unicode tables (see `navguard_logs::text`).
+            Data::Str(s) => format!("string {}", navguard_logs::text::quoted(s)),
+            Data::Arr(_) => "sequence".into(),
+            Data::Obj(_) => "map".into(),
         }
     }
-
     /// A float as serde_json writes it in messages: the shortest digits,
     /// fixed for decimal exponents -5..=15 (`1000.0`, `0.00001`), else
-    /// `1.5e+16`, `1e-7`.
+    /// `1.5e+16`, `1e-7`. Built from bytes: str slicing's panic path would
+    /// bring std's Unicode tables into the core module.
     #[inline]
     fn float_text(x: f64) -> String {
+        // `{:e}` of |x|: the shortest digits, a dot after the first, `e`,
+        // the exponent.
         let sci = format!("{:e}", x.abs());
-        let (mant, exp) = sci.split_once('e').unwrap_or((&sci, "0"));
-        let exp: i32 = exp.parse().unwrap_or(0);
-        let digits: String = mant.chars().filter(char::is_ascii_digit).collect();
+        let mut digits = Vec::new();
+        let mut exp = 0i32;
+        let mut bytes = sci.bytes();
+        for b in bytes.by_ref() {
+            match b {
+                b'0'..=b'9' => digits.push(b),
+                b'e' => break,
+                _ => {}
+            }
+        }
+        let mut negative_exp = false;
+        for b in bytes {
+            match b {
+                b'0'..=b'9' => exp = exp * 10 + i32::from(b - b'0'),
+                _ => negative_exp = true,
+            }
+        }
+        if negative_exp {
+            exp = -exp;
+        }
         let n = digits.len() as i32;
-        let sign = if x.is_sign_negative() { "-" } else { "" };
-        let body = if (-5..=15).contains(&exp) {
+        let mut out = String::new();
+        if x.is_sign_negative() {
+            out.push('-');
+        }
+        let zeros = |out: &mut String, k: i32| (0..k).for_each(|_| out.push('0'));
+        let push = |out: &mut String, d: &[u8]| d.iter().for_each(|&b| out.push(b as char));
+        if (-5..=15).contains(&exp) {
             if n - 1 <= exp {
-                format!("{digits}{}.0", "0".repeat((exp - (n - 1)) as usize))
+                push(&mut out, &digits);
+                zeros(&mut out, exp - (n - 1));
+                out.push_str(".0");
             } else if exp >= 0 {
                 let (a, b) = digits.split_at(exp as usize + 1);
-                format!("{a}.{b}")
+                push(&mut out, a);
+                out.push('.');
+                push(&mut out, b);
             } else {
-                format!("0.{}{digits}", "0".repeat((-exp - 1) as usize))
+                out.push_str("0.");
+                zeros(&mut out, -exp - 1);
+                push(&mut out, &digits);
             }
         } else {
-            let (a, b) = digits.split_at(1);
-            let dot = if b.is_empty() { String::new() } else { format!(".{b}") };
-            format!("{a}{dot}e{}{}", if exp >= 0 { "+" } else { "-" }, exp.abs())
-        };
-        format!("{sign}{body}")
+            push(&mut out, &digits[..1]);
+            if n > 1 {
+                out.push('.');
+                push(&mut out, &digits[1..]);
+            }
+            out.push_str(if exp >= 0 { "e+" } else { "e-" });
+            out.push_str(&exp.abs().to_string());
+        }
+        out
     }
 
     #[inline]
-    fn invalid(v: &Value, expected: &str) -> String {
+    fn invalid(v: &Data, expected: &str) -> String {
         format!("invalid type: {}, expected {expected}", unexpected(v))
     }
 
     #[inline]
-    pub fn f64_of(v: &Value) -> Result<f64, String> {
+    pub fn f64_of(v: &Data) -> Result<f64, String> {
         v.as_f64().ok_or_else(|| invalid(v, "f64"))
     }
 
     #[inline]
-    pub fn string_of(v: &Value) -> Result<String, String> {
-        v.as_str().map(str::to_string).ok_or_else(|| invalid(v, "a string"))
+    pub fn string_of(v: &Data) -> Result<String, String> {
+        match v {
+            Data::Str(s) => Ok(s.clone()),
+            _ => Err(invalid(v, "a string")),
+        }
     }
 
     #[inline]
-    pub fn bool_of(v: &Value) -> Result<bool, String> {
-        v.as_bool().ok_or_else(|| invalid(v, "a boolean"))
+    pub fn bool_of(v: &Data) -> Result<bool, String> {
+        match *v {
+            Data::Bool(b) => Ok(b),
+            _ => Err(invalid(v, "a boolean")),
+        }
     }
 
     /// `[f64; N]`: elements first, then the length (as serde reads them).
     #[inline]
-    fn array_of<const N: usize>(v: &Value) -> Result<[f64; N], String> {
-        let Value::Array(a) = v else { return Err(invalid(v, &format!("an array of length {N}"))) };
+    fn array_of<const N: usize>(v: &Data) -> Result<[f64; N], String> {
+        let Data::Arr(a) = v else { return Err(invalid(v, &format!("an array of length {N}"))) };
         let mut out = [0.0; N];
         for (i, o) in out.iter_mut().enumerate() {
             *o = f64_of(a.get(i).ok_or_else(|| format!("invalid length {i}, expected an array of length {N}"))?)?;
@@ -355,8 +480,8 @@ mod plain {
 
     /// `[[f64; N]; K]`.
     #[inline]
-    fn rows_of<const N: usize, const K: usize>(v: &Value) -> Result<[[f64; N]; K], String> {
-        let Value::Array(a) = v else { return Err(invalid(v, &format!("an array of length {K}"))) };
+    fn rows_of<const N: usize, const K: usize>(v: &Data) -> Result<[[f64; N]; K], String> {
+        let Data::Arr(a) = v else { return Err(invalid(v, &format!("an array of length {K}"))) };
         let mut out = [[0.0; N]; K];
         for (i, o) in out.iter_mut().enumerate() {
             *o = array_of(a.get(i).ok_or_else(|| format!("invalid length {i}, expected an array of length {K}"))?)?;
@@ -368,8 +493,8 @@ mod plain {
     }
 
     #[inline]
-    fn pairs_of(v: &Value) -> Result<Vec<[f64; 2]>, String> {
-        let Value::Array(a) = v else { return Err(invalid(v, "a sequence")) };
+    fn pairs_of(v: &Data) -> Result<Vec<[f64; 2]>, String> {
+        let Data::Arr(a) = v else { return Err(invalid(v, "a sequence")) };
         a.iter().map(array_of).collect()
     }
 
@@ -381,23 +506,23 @@ mod plain {
     }
 
     #[inline]
-    fn anfis_of(v: &Value) -> Result<Anfis, String> {
-        let Value::Object(m) = v else { return Err(invalid(v, "struct Anfis")) };
+    fn anfis_of(v: &Data) -> Result<Anfis, String> {
+        let Data::Obj(_) = v else { return Err(invalid(v, "struct Anfis")) };
         // Key order: centre, conseq, sigma.
-        let centre = m.get("centre").map(rows_of).transpose()?;
-        let conseq = m.get("conseq").map(rows_of).transpose()?;
-        let sigma = m.get("sigma").map(rows_of).transpose()?;
+        let centre = v.get("centre").map(rows_of).transpose()?;
+        let conseq = v.get("conseq").map(rows_of).transpose()?;
+        let sigma = v.get("sigma").map(rows_of).transpose()?;
         Ok(Anfis { centre: required(centre, "centre")?, sigma: required(sigma, "sigma")?, conseq: required(conseq, "conseq")? })
     }
 
     #[inline]
-    pub fn model_of(v: &Value) -> Result<Model, String> {
-        let Value::Object(m) = v else { return Err(invalid(v, "struct Model")) };
+    pub fn model_of(v: &Data) -> Result<Model, String> {
+        let Data::Obj(_) = v else { return Err(invalid(v, "struct Model")) };
         // Key order: anfis, d1, d2, provenance (declaration order too).
-        let anfis = m.get("anfis").map(anfis_of).transpose()?;
-        let d1 = m.get("d1").map(pairs_of).transpose()?;
-        let d2 = m.get("d2").map(pairs_of).transpose()?;
-        let provenance = m.get("provenance").map(string_of).transpose()?.unwrap_or_default();
+        let anfis = v.get("anfis").map(anfis_of).transpose()?;
+        let d1 = v.get("d1").map(pairs_of).transpose()?;
+        let d2 = v.get("d2").map(pairs_of).transpose()?;
+        let provenance = v.get("provenance").map(string_of).transpose()?.unwrap_or_default();
         Ok(Model { anfis: required(anfis, "anfis")?, d1: required(d1, "d1")?, d2: required(d2, "d2")?, provenance })
     }
 }

@@ -57,7 +57,7 @@ use crate::frames::Anchor;
 use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 pub use crate::model::{has_signature, Model};
-use crate::sample::Sample;
+use crate::sample::{range_of, Sample};
 use crate::track::VelocityTrack;
 
 /// What kind of verdict a row carries.
@@ -2321,8 +2321,6 @@ impl Detector {
     }
 }
 
-const GROUPS_ALL_OR_NONE: [[usize; 3]; 5] = [[1, 2, 3], [4, 5, 6], [7, 8, 9], [14, 15, 16], [17, 18, 19]];
-
 /// Flying: moving faster than 1 m/s or more than 2 m above the anchor.
 fn kf_flying(kf: &Kf) -> bool {
     kf.velocity().norm() > 1.0 || -kf.position()[2] > 2.0
@@ -2338,27 +2336,6 @@ const RANGES: [(f64, f64); 25] = {
     }
     a
 };
-
-/// Valid ranges per column: a value outside is an input error.
-const fn range_of(i: usize) -> (f64, f64) {
-    match i {
-        0 => (-1e12, 1e12),           // t, s
-        1 => (-90.0, 90.0),           // lat
-        2 => (-180.0, 180.0),         // lon
-        3 => (-2000.0, 1e5),          // alt, m
-        4..=6 => (-1e7, 1e7),         // pn/pe/pd, m
-        7..=9 => (-2000.0, 2000.0),   // velocity, m/s
-        10 => (0.0, 100.0),           // fix
-        11 => (0.0, 1000.0),          // sats
-        12 | 13 => (0.0, 1e12),       // eph/epv, m
-        14..=16 => (-2000.0, 2000.0), // accel, m/s²
-        17..=19 => (-200.0, 200.0),   // gyro, rad/s
-        20..=23 => (-2.0, 2.0),       // quaternion
-        24 => (-2000.0, 1e5),         // baro, m
-        26 => (-1e12, 1e12),          // gps_time, s
-        _ => (f64::NEG_INFINITY, f64::INFINITY),
-    }
-}
 
 /// The common case in one branch-free pass: every value NaN or inside its
 /// range (an infinity is outside every range), `t` present, and every
@@ -2394,33 +2371,12 @@ pub fn validate_sample(s: &Sample, row: u64) -> Result<(), InputError> {
     validate_detailed(s, row)
 }
 
-/// The checks one by one, naming the first field that fails.
+/// The checks one by one, naming the first field that fails: the row's
+/// own ([`Sample::first_invalid`], compiled in the log crate, for size:
+/// 6 KB of cold code at this crate's opt-level), then the quaternion's norm.
 fn validate_detailed(s: &Sample, row: u64) -> Result<(), InputError> {
-    use crate::sample::COLUMNS;
-    if !s.t.is_finite() {
-        return Err(InputError { row, field: "t", reason: format!("required and must be finite, got {}", s.t) });
-    }
-    for (i, name) in COLUMNS.iter().enumerate() {
-        let v = s.get(i);
-        if v.is_nan() {
-            continue;
-        }
-        let (lo, hi) = range_of(i);
-        if !v.is_finite() || v < lo || v > hi {
-            return Err(InputError { row, field: name, reason: format!("value {v} outside [{lo}, {hi}]") });
-        }
-    }
-    for g in GROUPS_ALL_OR_NONE.iter().map(|g| g.as_slice()).chain(core::iter::once([20usize, 21, 22, 23].as_slice())) {
-        let present = g.iter().filter(|&&i| !s.get(i).is_nan()).count();
-        if present != 0 && present != g.len() {
-            let missing = g.iter().find(|&&i| s.get(i).is_nan()).copied().unwrap_or(g[0]);
-            let have = g.iter().find(|&&i| !s.get(i).is_nan()).copied().unwrap_or(g[0]);
-            return Err(InputError {
-                row,
-                field: COLUMNS[missing],
-                reason: format!("missing (NaN) while '{}' is present", COLUMNS[have]),
-            });
-        }
+    if let Some((field, reason)) = s.first_invalid() {
+        return Err(InputError { row, field, reason });
     }
     if s.has_attitude() && quat_from_wxyz(s.qw, s.qx, s.qy, s.qz).is_none() {
         return Err(InputError { row, field: "qw", reason: "quaternion norm must be near 1".into() });

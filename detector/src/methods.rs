@@ -74,6 +74,8 @@ impl Method {
     }
 
     /// The method named `s` (as in `config.method`); the error lists them.
+    /// `#[inline]`: cold, as [`crate::model::Model::check`].
+    #[inline]
     pub fn parse(s: &str) -> Result<Method, ConfigError> {
         Method::ALL.iter().copied().find(|m| m.name() == s).ok_or_else(|| {
             let names: Vec<String> = Method::ALL.iter().map(|m| format!("\"{}\"", m.name())).collect();

@@ -59,6 +59,9 @@ impl Model {
     }
 
     /// Finite ANFIS parameters with positive widths, finite database entries.
+    /// `#[inline]`: cold (the config check), compiled where the config is
+    /// read (the core wasm module builds that crate for size).
+    #[inline]
     pub fn check(&self) -> Result<(), String> {
         check_anfis(&self.anfis)?;
         if !self.d1.iter().chain(self.d2.iter()).flatten().all(|v| v.is_finite()) {

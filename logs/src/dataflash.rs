@@ -546,8 +546,8 @@ impl Layout {
         for &ch in format {
             let Some(size) = char_size(ch) else {
                 warning = Some(format!(
-                    "{name}: unknown format character {:?}; its later columns are not read",
-                    char::from(ch)
+                    "{name}: unknown format character {}; its later columns are not read",
+                    crate::text::quoted_char(char::from(ch))
                 ));
                 break;
             };
@@ -557,8 +557,8 @@ impl Layout {
         }
         if warning.is_none() && off != len {
             warning = Some(format!(
-                "{name}: FMT says {len} bytes but format {:?} needs {off}; fields beyond the length are not read",
-                String::from_utf8_lossy(format)
+                "{name}: FMT says {len} bytes but format {} needs {off}; fields beyond the length are not read",
+                crate::text::quoted(&String::from_utf8_lossy(format))
             ));
         }
         let kind = kind_of(&name);

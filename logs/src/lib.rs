@@ -29,6 +29,7 @@ pub mod sample;
 pub mod csv;
 pub mod dataflash;
 pub mod extras;
+pub mod text;
 pub mod ulog;
 
 /// What a reader made of a log.

@@ -212,6 +212,67 @@ impl Sample {
     }
 }
 
+/// Valid ranges per column: a value outside is an input error (the
+/// detector's checks; here so that the cold field-by-field checks,
+/// [`Sample::first_invalid`], compile in this crate, which the core wasm
+/// module builds for size).
+pub const fn range_of(i: usize) -> (f64, f64) {
+    match i {
+        0 => (-1e12, 1e12),           // t, s
+        1 => (-90.0, 90.0),           // lat
+        2 => (-180.0, 180.0),         // lon
+        3 => (-2000.0, 1e5),          // alt, m
+        4..=6 => (-1e7, 1e7),         // pn/pe/pd, m
+        7..=9 => (-2000.0, 2000.0),   // velocity, m/s
+        10 => (0.0, 100.0),           // fix
+        11 => (0.0, 1000.0),          // sats
+        12 | 13 => (0.0, 1e12),       // eph/epv, m
+        14..=16 => (-2000.0, 2000.0), // accel, m/s²
+        17..=19 => (-200.0, 200.0),   // gyro, rad/s
+        20..=23 => (-2.0, 2.0),       // quaternion
+        24 => (-2000.0, 1e5),         // baro, m
+        26 => (-1e12, 1e12),          // gps_time, s
+        _ => (f64::NEG_INFINITY, f64::INFINITY),
+    }
+}
+
+/// Column groups that must be all present or all absent in a row: the
+/// GPS position (lat/lon/alt and pn/pe/pd), velocity, accelerometer, gyro,
+/// attitude quaternion.
+pub const GROUPS_ALL_OR_NONE: [&[usize]; 6] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23]];
+
+impl Sample {
+    /// The first field that fails the row checks, with why: `t` present and
+    /// finite, every value in its range ([`range_of`]), each group of
+    /// [`GROUPS_ALL_OR_NONE`] complete. `None` when all pass (the
+    /// quaternion's norm is the detector's to check). Cold: the detector
+    /// calls it only for a row its fast check refused, for the message.
+    pub fn first_invalid(&self) -> Option<(&'static str, String)> {
+        if !self.t.is_finite() {
+            return Some(("t", format!("required and must be finite, got {}", self.t)));
+        }
+        for (i, name) in COLUMNS.iter().enumerate() {
+            let v = self.get(i);
+            if v.is_nan() {
+                continue;
+            }
+            let (lo, hi) = range_of(i);
+            if !v.is_finite() || v < lo || v > hi {
+                return Some((name, format!("value {v} outside [{lo}, {hi}]")));
+            }
+        }
+        for g in GROUPS_ALL_OR_NONE {
+            let present = g.iter().filter(|&&i| !self.get(i).is_nan()).count();
+            if present != 0 && present != g.len() {
+                let missing = g.iter().find(|&&i| self.get(i).is_nan()).copied().unwrap_or(g[0]);
+                let have = g.iter().find(|&&i| !self.get(i).is_nan()).copied().unwrap_or(g[0]);
+                return Some((COLUMNS[missing], format!("missing (NaN) while '{}' is present", COLUMNS[have])));
+            }
+        }
+        None
+    }
+}
+
 #[cfg(all(test, not(target_arch = "wasm32")))]
 mod tests {
     use super::*;
@@ -240,5 +301,18 @@ mod tests {
         }
         assert!(r.get(COLUMNS.len()).is_nan());
         assert_eq!(Sample::column_index("gps_time"), Some(26));
+    }
+
+    #[test]
+    fn first_invalid_names_the_field_and_value() {
+        let mut s = Sample::at(1.0);
+        assert_eq!(s.first_invalid(), None);
+        s.lat = 91.0;
+        assert_eq!(s.first_invalid(), Some(("lat", "value 91 outside [-90, 90]".to_string())));
+        s.lat = f64::NAN;
+        s.ax = 1.0;
+        assert_eq!(s.first_invalid(), Some(("ay", "missing (NaN) while 'ax' is present".to_string())));
+        s.t = f64::INFINITY;
+        assert_eq!(s.first_invalid(), Some(("t", "required and must be finite, got inf".to_string())));
     }
 }

@@ -26,6 +26,8 @@ use serde_json::{Map, Number, Value};
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
+use crate::config::Data;
+
 #[wasm_bindgen]
 extern "C" {
     /// A value checked to be some typed array (the accessors below throw,
@@ -88,32 +90,32 @@ pub fn own_keys(obj: &JsValue, what: &str) -> Result<Vec<String>, String> {
     Ok(out)
 }
 
-/// A JS number as JSON: integers (other than −0) as integers, so that integer
-/// fields deserialize; non-finite numbers are an error (JSON has none).
-fn json_number(x: f64, path: &str) -> Result<Value, String> {
+/// A JS number as plain data: integers (other than −0) as integers, as
+/// serde_json reads them from JSON text, so that integer fields deserialize
+/// and messages name them so; non-finite numbers are an error (JSON has none).
+fn number(x: f64, path: &str) -> Result<Data, String> {
     if !x.is_finite() {
         return Err(format!("{path}: must be a finite number, got {x}"));
     }
     let integral = x.fract() == 0.0 && x.abs() < 9.0e15 && !(x == 0.0 && x.is_sign_negative());
-    let n = if integral && x >= 0.0 {
-        Some(Number::from(x as u64))
-    } else if integral {
-        Some(Number::from(x as i64))
-    } else {
-        Number::from_f64(x)
-    };
-    n.map(Value::Number).ok_or_else(|| format!("{path}: must be a finite number, got {x}"))
+    Ok(match (integral, x >= 0.0) {
+        (true, true) => Data::U(x as u64),
+        (true, false) => Data::I(x as i64),
+        (false, _) => Data::F(x),
+    })
 }
 
-/// Copy a user value into plain JSON data (what `JSON.parse(JSON.stringify(v))`
+/// Copy a user value into plain data (what `JSON.parse(JSON.stringify(v))`
 /// would give, but with every read caught and errors naming the path).
-/// `None` for `undefined` (an absent field).
-pub fn plain(v: &JsValue, path: &str) -> Result<Option<Value>, String> {
+/// `None` for `undefined` (an absent field). [`Data`], not serde_json's
+/// `Value`: the core module reads its config from it and so carries no
+/// `Value` or map; the lab's options go on to serde through [`json_of`].
+pub fn plain(v: &JsValue, path: &str) -> Result<Option<Data>, String> {
     let mut budget = MAX_PLAIN_VALUES;
     plain_at(v, path, 0, &mut budget)
 }
 
-fn plain_at(v: &JsValue, path: &str, depth: usize, budget: &mut usize) -> Result<Option<Value>, String> {
+fn plain_at(v: &JsValue, path: &str, depth: usize, budget: &mut usize) -> Result<Option<Data>, String> {
     if *budget == 0 {
         return Err(format!("{path}: too large (more than {MAX_PLAIN_VALUES} values)"));
     }
@@ -122,16 +124,16 @@ fn plain_at(v: &JsValue, path: &str, depth: usize, budget: &mut usize) -> Result
         return Ok(None);
     }
     if v.is_null() {
-        return Ok(Some(Value::Null));
+        return Ok(Some(Data::Null));
     }
     if let Some(b) = v.as_bool() {
-        return Ok(Some(Value::Bool(b)));
+        return Ok(Some(Data::Bool(b)));
     }
     if let Some(x) = v.as_f64() {
-        return json_number(x, path).map(Some);
+        return number(x, path).map(Some);
     }
     if let Some(s) = v.as_string() {
-        return Ok(Some(Value::String(s)));
+        return Ok(Some(Data::Str(s)));
     }
     if !v.is_object() || v.is_function() {
         let kind = v.js_typeof().as_string().unwrap_or_default();
@@ -148,19 +150,42 @@ fn plain_at(v: &JsValue, path: &str, depth: usize, budget: &mut usize) -> Result
         for i in 0..n {
             let p = format!("{path}[{i}]");
             let x = get(v, &JsValue::from(i as f64), &p)?;
-            out.push(plain_at(&x, &p, depth + 1, budget)?.unwrap_or(Value::Null));
+            out.push(plain_at(&x, &p, depth + 1, budget)?.unwrap_or(Data::Null));
         }
-        return Ok(Some(Value::Array(out)));
+        return Ok(Some(Data::Arr(out)));
     }
-    let mut out = Map::new();
+    let mut out = Vec::new();
     for k in own_keys(v, path)? {
         let p = format!("{path}.{k}");
         let x = get(v, &JsValue::from_str(&k), &p)?;
         if let Some(x) = plain_at(&x, &p, depth + 1, budget)? {
-            out.insert(k, x);
+            out.push((k, x));
         }
     }
-    Ok(Some(Value::Object(out)))
+    Ok(Some(Data::Obj(out)))
+}
+
+/// Plain data as serde_json's, for serde to read (the lab's options).
+fn json_of(d: Data) -> Value {
+    match d {
+        Data::Null => Value::Null,
+        Data::Bool(b) => Value::Bool(b),
+        Data::U(u) => Value::Number(u.into()),
+        Data::I(i) => Value::Number(i.into()),
+        // Finite (checked by `number`), so always a JSON number.
+        Data::F(x) => Number::from_f64(x).map_or(Value::Null, Value::Number),
+        Data::Str(s) => Value::String(s),
+        Data::Arr(a) => Value::Array(a.into_iter().map(json_of).collect()),
+        Data::Obj(o) => {
+            // Inserted one by one: `collect` would bring in the map's bulk
+            // build (a sort) too.
+            let mut m = Map::new();
+            for (k, v) in o {
+                m.insert(k, json_of(v));
+            }
+            Value::Object(m)
+        }
+    }
 }
 
 /// `v.length` of an array-like, checked to be an integer no larger than `max`.
@@ -407,7 +432,7 @@ pub const MAX_TEXT: usize = 1 << 26;
 pub const MAX_NAME: usize = 4096;
 
 /// The checked detector config: the same checker as
-/// `ConfigInput::from_json` (both go through `ConfigInput::from_value`).
+/// `ConfigInput::from_json` (both go through `ConfigInput::from_data`).
 /// Fields are read once each, by name, through catching calls: a throwing
 /// getter or Proxy trap is a config error naming the field, and nothing is
 /// left half-done.
@@ -420,15 +445,15 @@ pub fn config_from(v: &JsValue) -> Result<crate::config::Config, JsError> {
     for name in own_keys(v, "config").map_err(err)? {
         ConfigInput::check_field_name(&name).map_err(err)?;
     }
-    let mut map = Map::new();
+    let mut fields = Vec::new();
     for name in ConfigInput::FIELDS {
         let what = format!("config.{name}");
         let x = get(v, &JsValue::from_str(name), &what).map_err(err)?;
         if let Some(x) = plain(&x, &what).map_err(err)? {
-            map.insert(name.to_string(), x);
+            fields.push((name.to_string(), x));
         }
     }
-    ConfigInput::from_value(Value::Object(map)).map_err(err)
+    ConfigInput::from_data(Data::Obj(fields)).map_err(err)
 }
 
 /// A user object as `T`, copied to plain data first (see [`plain`]);
@@ -442,7 +467,7 @@ pub fn options<T: DeserializeOwned + Default>(v: &JsValue, what: &str) -> Result
 
 /// A user object as `T`, copied to plain data first (see [`plain`]).
 pub fn plain_of<T: DeserializeOwned>(v: &JsValue, what: &str) -> Result<T, JsError> {
-    let x = plain(v, what).map_err(err)?.unwrap_or(Value::Null);
+    let x = plain(v, what).map_err(err)?.map_or(Value::Null, json_of);
     serde_json::from_value(x).map_err(|e| err(format!("{what}: {e}")))
 }
 
