@@ -178,6 +178,10 @@ impl DriftTest {
         let e = Entry { t, x: [level[0], level[1], 0.0], motion };
         self.pending = Some(e);
         let (Some(e0), r0) = self.window.note(e) else {
+            // No start: too young, or dropped as stale while a fault was
+            // judged. A fault judged on it is over (judging would keep the
+            // window from ever refilling).
+            self.judging = false;
             return f64::NAN;
         };
         self.last_span = t - e0.t;
@@ -299,6 +303,22 @@ mod tests {
         assert_eq!(back.len(), 1, "{back:?}");
         assert!((back[0] - 100.0).abs() < 1e-9, "{back:?}");
         assert!(!d.judging);
+    }
+
+    #[test]
+    fn a_drift_held_past_the_stale_limit_lets_the_window_refill() {
+        // A drift called at about 40 s that never comes back: once its start
+        // is 120 s old it is dropped, judging ends, and normal epochs
+        // refill the window (the test judges again 30 s later).
+        let mut d = DriftTest::default();
+        let s = run(&mut d, 0.0, 3000, 10.0, &|t| {
+            let x = 0.4 * (t - 5.0).clamp(0.0, 60.0);
+            [x, x]
+        });
+        assert!(s[400] >= DRIFT_Z, "{}", s[400]);
+        assert!(s[1200..1260].iter().any(|x| x.is_nan()), "start never dropped");
+        assert!(!d.judging);
+        assert!(s[2900..].iter().all(|x| x.is_finite() && *x < DRIFT_Z), "{:?}", &s[2900..2905]);
     }
 
     #[test]

@@ -138,6 +138,10 @@ impl RampTest {
         let e = Entry { t, x: d, ..Entry::default() };
         self.pending = Some(e);
         let (Some(e0), r0) = self.window.note(e) else {
+            // No start: too young, or dropped as stale while a fault was
+            // judged. A fault judged on it is over (judging would keep the
+            // window from ever refilling).
+            self.judging = false;
             return f64::NAN;
         };
         self.last_span = t - e0.t;
