@@ -15,11 +15,15 @@
 //! So, like the baro's drift (`drift`): the change of `d` (smoothed over
 //! `SMOOTH_S`) over the last `SPAN_S`, horizontal and vertical apart, over
 //! a σ learnt slowly from a prior and never below the receiver's accuracy
-//! claim. A ramp is called only when it is one: the change over the last
-//! `RECENT_S` (see `window`), scaled to the window, points the same way and is no more than
-//! `MAX_RATIO` times the window's change (a jump inside the last `RECENT_S`
-//! gives twice the window's change at that scale; a ramp that has filled
-//! the window gives the window's change). Once called, the window's start
+//! claim (only the horizontal one is used: see `push`). A ramp is called
+//! only when it is one: the change over the last `RECENT_S` (see
+//! `window`), scaled to the window, points the same way and is no more
+//! than `MAX_RATIO` times the window's change (a jump inside the last
+//! `RECENT_S` gives twice the window's change at that scale; a ramp that
+//! has filled the window gives the window's change); no jump lies in the
+//! window (`JUMP_Z`); and the track has settled (`SETTLE_S`), and the
+//! receiver does not call the fix degraded (the detector's side). Once
+//! called, the window's start
 //! is held (no entry is added) and the ramp is judged on the full change
 //! until it falls below `RELEASE_Z`: the position back on its track from
 //! before the ramp, which `returned` reports so the detector re-anchors on
