@@ -6,23 +6,11 @@
 //! (issue 14: baro faults were 43% of the missed fault epochs).
 #![cfg(not(target_arch = "wasm32"))]
 
-use navguard::battery::{self, Flight, Split};
-use navguard::{Config, Detector};
+mod common;
 
-/// GPS epochs flagged in the `len` s after fault `i` ends, and the GPS
-/// epochs in that span.
-fn flagged_after(f: &Flight, i: usize, len: f64) -> (usize, usize) {
-    let ft = f.faults[i];
-    let rows = battery::simulate(f);
-    let mut det = Detector::new(Config::default()).unwrap();
-    let after: Vec<u8> = rows
-        .iter()
-        .map(|s| (s, det.push(s).unwrap().status))
-        .filter(|(s, _)| !s.label.is_nan() && s.t >= ft.end_log && s.t < ft.end_log + len)
-        .map(|(_, st)| st)
-        .collect();
-    (after.iter().filter(|st| **st != 0).count(), after.len())
-}
+use common::flagged_after;
+use navguard::battery::{self, Flight, Split};
+use navguard::Config;
 
 fn share(split: Split, index: u64, kind: &str) -> f64 {
     let f = Flight::draw(split, index);
@@ -56,6 +44,6 @@ fn a_slow_drift_under_a_noisy_gps_altitude_is_flagged() {
 fn the_end_of_a_vertical_drag_off_opens_no_interval() {
     let f = Flight::draw(Split::Tune, 60);
     assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("drag-off", battery::Axis::Vertical));
-    let (n, of) = flagged_after(&f, 0, 30.0);
+    let (n, of) = flagged_after(&f, 30.0);
     assert!(of > 50 && n * 20 <= of, "{n} of {of} epochs flagged in the 30 s after the drag-off");
 }

@@ -5,22 +5,11 @@
 //! truthful GPS velocity is flagged for under 3 s in total").
 #![cfg(not(target_arch = "wasm32"))]
 
-use navguard::battery::{self, Flight, Split};
-use navguard::{Config, Detector};
+mod common;
 
-/// GPS epochs flagged in the `len` s after the flight's first fault ends,
-/// and the GPS epochs in that span.
-fn flagged_after(f: &Flight, len: f64) -> (usize, usize) {
-    let ft = f.faults[0];
-    let mut det = Detector::new(Config::default()).unwrap();
-    let after: Vec<u8> = battery::simulate(f)
-        .iter()
-        .map(|s| (s, det.push(s).unwrap().status))
-        .filter(|(s, _)| !s.label.is_nan() && s.t >= ft.end_log && s.t < ft.end_log + len)
-        .map(|(_, st)| st)
-        .collect();
-    (after.iter().filter(|st| **st != 0).count(), after.len())
-}
+use common::flagged_after;
+use navguard::battery::{self, Flight, Split};
+use navguard::Config;
 
 /// Regression: tune #197 (survey, 10 Hz GPS, Gauss–Markov σ 0.79 m): a
 /// 0.36 m/s horizontal ramp for 51 s was flagged for 0% of it (the filter

@@ -5,18 +5,14 @@
 //! that return is flagged as a new fault").
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
 use navguard::battery::{self, Flight, Split};
 use navguard::{Config, Detector};
 
 /// GPS epochs flagged in the `len` s after the flight's first fault ends.
 fn flagged_after(f: &Flight, len: f64) -> usize {
-    let ft = f.faults[0];
-    let rows = battery::simulate(f);
-    let mut det = Detector::new(Config::default()).unwrap();
-    rows.iter()
-        .map(|s| (s, det.push(s).unwrap().status))
-        .filter(|(s, st)| !s.label.is_nan() && s.t >= ft.end_log && s.t < ft.end_log + len && *st != 0)
-        .count()
+    common::flagged_after(f, len).0
 }
 
 /// Regression: battery tune #148 (hover, 10 Hz GPS, white σ 1.6 m, true

@@ -765,14 +765,10 @@ struct Consistency {
     /// the first.
     baro_gps_level: VelocityTrack,
     baro_dop_level: VelocityTrack,
-    /// The baro's drift against both levels over a long window, and its
-    /// statistic at the last GPS epoch (NaN when not judged).
+    /// The baro's drift against both levels over a long window.
     baro_drift: DriftTest,
-    drift_stat: f64,
-    /// The position ramping off its velocity track, and its statistic at
-    /// the last GPS epoch (NaN when not judged).
+    /// The position ramping off its velocity track.
     ramp: RampTest,
-    ramp_stat: f64,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
     /// vertical velocity up m/s or NaN when it was not trusted).
     baro_epoch: Option<(f64, f64, f64)>,
@@ -1053,9 +1049,7 @@ impl Consistency {
             baro_gps_level: VelocityTrack::default(),
             baro_dop_level: VelocityTrack::default(),
             baro_drift: DriftTest::default(),
-            drift_stat: f64::NAN,
             ramp: RampTest::default(),
-            ramp_stat: f64::NAN,
             baro_epoch: None,
         }
     }
@@ -1092,8 +1086,9 @@ impl Consistency {
     /// it is withheld, so a baro fault met during a GPS episode is still
     /// judged against the level learnt before it: restarting the levels
     /// there learnt the faulty baro as the new level, and its return was
-    /// flagged for up to 120 s (battery tune #131).
-    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64) {
+    /// flagged for up to 120 s (battery tune #131). Returns the baro drift
+    /// statistic (see `drift`), NaN when not judged.
+    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64) -> f64 {
         let vup = v.map_or(f64::NAN, |v| -v[2]);
         let prev = self.baro_epoch.replace((t, self.alt_int, vup));
         let baro = self.last_baro.filter(|(tb, _)| t - tb < 0.5).map(|(_, b)| b);
@@ -1101,8 +1096,7 @@ impl Consistency {
             self.baro_gps_level.clear();
             self.baro_dop_level.clear();
             self.baro_drift.clear();
-            self.drift_stat = f64::NAN;
-            return;
+            return f64::NAN;
         };
         let dt = (t - pt) * self.rate.scale;
         self.baro_gps_level.step(dt, [b + y[2], 0.0, 0.0], [0.0; 3], [0.0; 3]);
@@ -1112,7 +1106,7 @@ impl Consistency {
         self.baro_dop_level.step(dt, [b, 0.0, 0.0], [v1, 0.0, 0.0], [v0, 0.0, 0.0]);
         let level = [self.baro_gps_level.level(), self.baro_dop_level.level()];
         let motion = Motion { speed2: v.map_or(f64::NAN, |v| v[0] * v[0] + v[1] * v[1]), climb: v1, height: -y[2] };
-        self.drift_stat = self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv);
+        self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv)
     }
 
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
@@ -1177,7 +1171,7 @@ impl Consistency {
         // The position ramping off its track (see `ramp`).
         // Not across a fix the receiver calls degraded: its position walks
         // off by design, and the walk's end would read as a ramp.
-        self.ramp_stat = match (track_dt, self.track.d()) {
+        let ramp = match (track_dt, self.track.d()) {
             (Some(dt), Some(d)) if !declared => self.ramp.push(dt, d, fix.eph, fix.epv),
             _ => {
                 self.ramp.clear();
@@ -1185,7 +1179,7 @@ impl Consistency {
             }
         };
         self.last_gps = fix.vel.map(|v| (t, y, v));
-        self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld), fix.epv);
+        let drift = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld), fix.epv);
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
             ind.observe_baro_gps(t, b + y[2]);
@@ -1204,13 +1198,13 @@ impl Consistency {
         ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).
-        out.fold(0, self.ramp_stat * RAMP_R_SCALE);
+        out.fold(0, ramp * RAMP_R_SCALE);
         // The baro's level: condemned only when it left both references
         // (NaN, not judged, unless both are); and its drift over a long
         // window, against both (see `drift`).
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
         let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
-        out.fold(2, dep.max(self.drift_stat * DRIFT_R_SCALE));
+        out.fold(2, dep.max(drift * DRIFT_R_SCALE));
         out
     }
 }
@@ -2909,7 +2903,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, drift_stat, ramp, ramp_stat, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

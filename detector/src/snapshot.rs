@@ -59,7 +59,8 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// the baro's drift test over 30 s against both GPS references
 /// (`drift::DriftTest`). 11: the position's ramp test off its velocity
 /// track (`ramp::RampTest`). 12: the two share one window (`window::Window`).
-pub const VERSION: u32 = 12;
+/// 13: their statistics are no longer kept between epochs.
+pub const VERSION: u32 = 13;
 
 #[derive(Clone)]
 struct Header {
