@@ -277,6 +277,11 @@ const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
 /// s: time constant of the learnt accelerometer noise.
 const IMU_PSD_TAU: f64 = 2.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
+/// The altitude vote's call, in σ on both references (see
+/// `Consistency::altitude_vote`), and its scale into the position group's
+/// R: the call lands just above the ANFIS boundary (R ≈ 2.55).
+const VOTE_Z: f64 = 4.0;
+const VOTE_R_SCALE: f64 = 2.8 / VOTE_Z;
 /// The baro drift statistic's scale into the baro group's R: its hold level
 /// (`drift::DRIFT_Z`) lands just above the ANFIS boundary (R ≈ 2.55).
 const DRIFT_R_SCALE: f64 = 2.8 / crate::drift::DRIFT_Z;
@@ -1109,6 +1114,34 @@ impl Consistency {
         self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv)
     }
 
+    /// The GPS altitude's departure from its two other vertical references
+    /// (see `tests`), in σ, where both agree in sign (the smaller; 0 when
+    /// they disagree, NaN when either is not judged yet). σ is never taken
+    /// below the receiver's vertical claim `epv` (m): the levels' baselines
+    /// follow a minute, and a Gauss–Markov receiver wanders further than
+    /// that teaches. When both references jump back by most of the offset
+    /// they held, the fault ended: their baselines move to the fix, so the
+    /// wander it left is not judged as a fault of its own.
+    /// Also returns whether this fix was that return.
+    fn altitude_vote(&mut self, epv: f64) -> (f64, bool) {
+        let (Some(b), Some(z)) = (self.baro_gps_level.offset(0), self.track.offset(2)) else {
+            return (f64::NAN, false);
+        };
+        let floor = if epv.is_finite() { epv } else { 0.0 };
+        let zs = |(now, prev, s): (f64, f64, f64)| {
+            let s = s.max(floor);
+            (now / s, prev / s)
+        };
+        let ((bn, bp), (zn, zp)) = (zs(b), zs(z));
+        let back = |now: f64, prev: f64| prev.abs() > VOTE_Z && now * prev >= 0.0 && now.abs() < 0.5 * prev.abs() || now * prev < 0.0 && prev.abs() > VOTE_Z;
+        if bp * zp > 0.0 && back(bn, bp) && back(zn, zp) {
+            self.baro_gps_level.rebase_axis(0);
+            self.track.rebase_axis(2);
+            return (0.0, true);
+        }
+        (if bn * zn > 0.0 { bn.abs().min(zn.abs()) } else { 0.0 }, false)
+    }
+
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
     /// `v1` (m/s), `on_imu` or on the constant-velocity model.
     fn advance(&mut self, dt: f64, v0: Vector3<f64>, v1: Vector3<f64>, flying: bool, on_imu: bool) {
@@ -1127,7 +1160,9 @@ impl Consistency {
     /// IMU consistency tests, decide whether the IMU test joins R, and close
     /// the epoch's indicators. `vel_withheld`: the GPS velocity is withheld;
     /// `learn_rate`: the receiver is trusted enough to teach the clock rate.
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool) -> Indicators {
+    /// Also returns whether the GPS altitude came back onto both its other
+    /// references at this fix (see `altitude_vote`).
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool) -> (Indicators, bool) {
         let (t, y) = (fix.t, fix.y);
         // The receiver's own time, when the log has it, measures the clock
         // whatever the vehicle does (inside episodes too).
@@ -1205,7 +1240,14 @@ impl Consistency {
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
         let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
         out.fold(2, dep.max(drift * DRIFT_R_SCALE));
-        out
+        // The GPS altitude off both other vertical references the same way:
+        // the baro (its level against the GPS altitude) and the GPS's own
+        // vertical velocity integrated (the track's down axis). Two of three
+        // agree, so the GPS position is condemned, not the baro; a baro
+        // fault moves only the first, a vertical drag-off only the second.
+        let (alt, alt_back) = self.altitude_vote(fix.epv);
+        out.fold(0, alt * VOTE_R_SCALE);
+        (out, alt_back)
     }
 }
 
@@ -2164,7 +2206,7 @@ impl Detector {
         // does not average out over headings and taught the clock a wrong
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
-        let ind = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared);
+        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -2180,8 +2222,10 @@ impl Detector {
         // The GPS back where it was before a fault the filter had followed:
         // its altitude on the baro's level after a drift the two GPS
         // references shared (a vertical drag-off, see `drift`), or its
-        // position on its velocity track after a ramp (see `ramp`).
-        let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned();
+        // position on its velocity track after a ramp (see `ramp`), or its
+        // altitude back onto both the baro and its own vertical velocity
+        // integrated after they both condemned it (`altitude_vote`).
+        let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back;
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back);
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
@@ -2840,6 +2884,72 @@ mod tests {
         let mut c = ClockRate::new();
         c.observe_time(1.0, f64::NAN);
         assert!(c.receiver.run.is_none() && c.scale == 1.0);
+    }
+
+    /// Feed the altitude vote's two references one 5 Hz epoch: the GPS
+    /// altitude's offset `e` (m, up) against a baro and a Doppler track
+    /// that carry white noise of 0.3 m; learn on normal epochs as the
+    /// detector does. Returns the vote and whether it saw a return.
+    fn vote_epoch(c: &mut Consistency, rng: &mut crate::rng::Rng, e: f64, epv: f64, learn: bool) -> (f64, bool) {
+        let dt = 0.2;
+        c.baro_gps_level.step(dt, [0.3 * rng.normal() - e, 0.0, 0.0], [0.0; 3], [0.0; 3]);
+        c.track.step(dt, [0.0, 0.0, 0.3 * rng.normal() - e], [0.0; 3], [0.0; 3]);
+        let out = c.altitude_vote(epv);
+        if learn {
+            c.track.learn();
+            c.baro_gps_level.learn();
+        }
+        out
+    }
+
+    #[test]
+    fn the_altitude_vote_calls_a_step_both_references_see_and_its_return() {
+        let mut c = Consistency::new();
+        let mut rng = crate::rng::Rng::new(3);
+        for _ in 0..200 {
+            let (v, back) = vote_epoch(&mut c, &mut rng, 0.0, 1.0, true);
+            assert!(!back && !(v > VOTE_Z), "calm: {v}");
+        }
+        // A 6 m step: 6σ of a 1 m claim on both, the same way.
+        let mut called = 0;
+        for _ in 0..50 {
+            let (v, _) = vote_epoch(&mut c, &mut rng, 6.0, 1.0, false);
+            called += (v > VOTE_Z) as usize;
+        }
+        assert!(called >= 45, "{called} of 50 step epochs called");
+        // Back: the return is seen once and the baselines move to the fix.
+        let (v, back) = vote_epoch(&mut c, &mut rng, 0.0, 1.0, false);
+        assert!(back && v == 0.0, "{v} {back}");
+        let (v, back) = vote_epoch(&mut c, &mut rng, 0.0, 1.0, true);
+        assert!(!back && v < 2.0, "{v} {back}");
+    }
+
+    #[test]
+    fn the_altitude_vote_takes_the_receivers_claim_as_its_sigma_floor() {
+        // The same 6 m step under a receiver that claims 2 m: 3σ, not called.
+        let mut c = Consistency::new();
+        let mut rng = crate::rng::Rng::new(3);
+        for _ in 0..200 {
+            vote_epoch(&mut c, &mut rng, 0.0, 2.0, true);
+        }
+        let (v, _) = vote_epoch(&mut c, &mut rng, 6.0, 2.0, false);
+        assert!(v > 2.0 && v < 3.5, "{v}");
+    }
+
+    #[test]
+    fn one_reference_alone_or_two_disagreeing_condemn_nothing() {
+        let mut c = Consistency::new();
+        let mut rng = crate::rng::Rng::new(5);
+        for _ in 0..200 {
+            vote_epoch(&mut c, &mut rng, 0.0, 0.5, true);
+        }
+        // The baro alone departs (its level moves, the track does not).
+        c.baro_gps_level.step(0.2, [8.0, 0.0, 0.0], [0.0; 3], [0.0; 3]);
+        c.track.step(0.2, [0.0; 3], [0.0; 3], [0.0; 3]);
+        assert_eq!(c.altitude_vote(0.5), (0.0, false));
+        // Both depart, opposite ways.
+        c.track.step(0.2, [0.0, 0.0, -8.0], [0.0; 3], [0.0; 3]);
+        assert_eq!(c.altitude_vote(0.5).0, 0.0);
     }
 
     #[test]

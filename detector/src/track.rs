@@ -160,6 +160,24 @@ impl VelocityTrack {
         }
     }
 
+    /// `d − base` on axis `a` (m) at this fix and at the previous one, and
+    /// σ of that axis (m). None until the baseline has lived `MIN_AGE_S`.
+    pub fn offset(&self, a: usize) -> Option<(f64, f64, f64)> {
+        match (self.d, self.d_prev) {
+            (Some(d), Some(p)) if self.age >= MIN_AGE_S && a < 3 => Some((d[a] - self.base[a], p[a] - self.base[a], self.sigma(a))),
+            _ => None,
+        }
+    }
+
+    /// The baseline of axis `a` moves to this fix's `d`: what remains after
+    /// a fault's end is the receiver's slow wander, not the fault.
+    pub fn rebase_axis(&mut self, a: usize) {
+        if let (Some(d), true) = (self.d, a < 3) {
+            self.base[a] = d[a];
+            self.outlying = 0.0;
+        }
+    }
+
     /// The fix sits on its own velocity track: within `NEAR` σ of the
     /// learnt baseline, once the baseline has lived `MIN_AGE_S`.
     pub fn on_track(&self) -> bool {
