@@ -58,6 +58,7 @@ use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 pub use crate::model::{has_signature, Model};
 use crate::sample::{range_of, Sample};
+use crate::dragend::DragEnd;
 use crate::track::VelocityTrack;
 
 /// What kind of verdict a row carries.
@@ -774,6 +775,8 @@ struct Consistency {
     baro_drift: DriftTest,
     /// The position ramping off its velocity track.
     ramp: RampTest,
+    /// The end of a horizontal drag-off, confirmed on the velocity's mean.
+    drag_end: DragEnd,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
     /// vertical velocity up m/s or NaN when it was not trusted).
     baro_epoch: Option<(f64, f64, f64)>,
@@ -1055,6 +1058,7 @@ impl Consistency {
             baro_dop_level: VelocityTrack::default(),
             baro_drift: DriftTest::default(),
             ramp: RampTest::default(),
+            drag_end: DragEnd::default(),
             baro_epoch: None,
         }
     }
@@ -1142,6 +1146,21 @@ impl Consistency {
         (if bn * zn > 0.0 { bn.abs().min(zn.abs()) } else { 0.0 }, false)
     }
 
+    /// A position episode that opened at this epoch (`opened_on_position`)
+    /// on a horizontal jump off the velocity track arms the drag-off's end
+    /// confirmation (see `dragend`); an episode that ended, or re-anchored,
+    /// disarms it.
+    fn arm_drag_end(&mut self, t: f64, opened_on_position: bool, step: &EpisodeStep) {
+        if !step.fault || step.reset {
+            self.drag_end.disarm();
+        } else if opened_on_position {
+            match self.track.jump() {
+                Some(j) => self.drag_end.arm(t, [j[0], j[1]]),
+                None => self.drag_end.disarm(),
+            }
+        }
+    }
+
     /// One prediction of `dt` s moved the filter's velocity from `v0` to
     /// `v1` (m/s), `on_imu` or on the constant-velocity model.
     fn advance(&mut self, dt: f64, v0: Vector3<f64>, v1: Vector3<f64>, flying: bool, on_imu: bool) {
@@ -1222,14 +1241,19 @@ impl Consistency {
         // IMU consistency: GPS horizontal velocity against the filter's
         // IMU-predicted velocity changes, only while every prediction since
         // the last epoch ran on the IMU.
-        if self.imu_gap {
+        let imu_gap = self.imu_gap;
+        if imu_gap {
             ind.clear_imu();
             self.imu_gap = false;
         }
-        match &fix.vel {
-            Some(v) if !declared => ind.observe_imu(t, [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]),
-            _ => ind.clear_imu(),
+        let z = fix.vel.filter(|_| !declared).map(|v| [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]);
+        match z {
+            Some(z) => ind.observe_imu(t, z),
+            None => ind.clear_imu(),
         }
+        // The same `z` measures a drag-off's end (see `dragend`); an IMU gap
+        // left changes out of `dv_imu`, so it restarts there.
+        self.drag_end.push(t, z.filter(|_| !imu_gap && !vel_withheld));
         ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).
@@ -2226,7 +2250,16 @@ impl Detector {
         // altitude back onto both the baro and its own vertical velocity
         // integrated after they both condemned it (`altitude_vote`).
         let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back;
-        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back);
+        // A position episode's jump confirmed as a drag-off's end over the
+        // seconds after it (see `dragend`): the track's level moved with the
+        // truth's return.
+        let drag_end = self.episode.active && self.consistency.drag_end.confirmed(fix.t, self.consistency.flight_time);
+        if drag_end {
+            self.consistency.track.rebase_axis(0);
+            self.consistency.track.rebase_axis(1);
+        }
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end);
+        let was_active = self.episode.active;
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
         // the fault (or the test would see the learnt error after it ends).
@@ -2242,12 +2275,15 @@ impl Detector {
         };
         let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         step.reset |= restart;
+        let opened_on_position = !self.oracle && !was_active && self.episode.withheld.gps_pos();
+        self.consistency.arm_drag_end(fix.t, opened_on_position, &step);
         if !step.fault && !step.reset {
             self.consistency.track.learn();
             self.consistency.baro_gps_level.learn();
             self.consistency.baro_dop_level.learn();
             self.consistency.baro_drift.learn();
             self.consistency.ramp.learn();
+            self.consistency.drag_end.learn();
         }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
@@ -3013,7 +3049,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

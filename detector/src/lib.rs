@@ -14,6 +14,7 @@ pub mod anfis;
 pub mod codec;
 pub mod config;
 pub mod detector;
+pub mod dragend;
 pub mod drift;
 pub mod error;
 pub mod filter;

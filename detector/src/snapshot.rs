@@ -59,8 +59,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// the baro's drift test over 30 s against both GPS references
 /// (`drift::DriftTest`). 11: the position's ramp test off its velocity
 /// track (`ramp::RampTest`). 12: the two share one window (`window::Window`).
-/// 13: their statistics are no longer kept between epochs.
-pub const VERSION: u32 = 13;
+/// 13: their statistics are no longer kept between epochs. 14: the
+/// horizontal drag-off's end confirmation (`dragend::DragEnd`).
+pub const VERSION: u32 = 14;
 
 #[derive(Clone)]
 struct Header {

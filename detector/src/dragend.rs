@@ -1,0 +1,314 @@
+//! The end of a horizontal drag-off, confirmed over the seconds after the
+//! jump.
+//!
+//! A drag-off (position and velocity pulled off together, spoofing style)
+//! is followed by the filter; when it ends, the position jumps back by the
+//! drag's rate times its age and the velocity by the rate. The detector
+//! tells that return from a step's onset at the jump itself when the
+//! velocity's jump clears its noise at one epoch (`Residuals::
+//! drag_returned`), which a 0.3–0.6 m/s drag under 0.2–0.3 m/s of velocity
+//! noise does not: the return was then judged as a step and flagged until
+//! the episode coasted out (battery tune #58: 0.58 m/s for 23 s, 60 s
+//! flagged after it).
+//!
+//! Here the velocity's jump is measured on means. `z = v − Σ Δv_IMU` (the
+//! GPS horizontal velocity against the IMU's predicted velocity changes,
+//! m/s) holds still through a manoeuvre, whatever the filter does. When a
+//! position episode opens on a jump `J` of the position off its velocity
+//! track, the mean of `z` over the `BEFORE_S` before the jump is compared
+//! with its mean from the jump on: a return moves it along `J` by the
+//! drag's rate, a step's onset does not move it. It is confirmed when that
+//! shift clears `Z` σ of the difference of the two means, and the drag's
+//! age it implies, `|J|` over the shift, is at least `MIN_AGE_S`. σ is the
+//! larger of the two sides' pooled spread (never below `SIGMA_FLOOR`) over
+//! their counts and the same shift's RMS learnt on normal epochs: a
+//! Gauss–Markov receiver's velocity wanders over seconds, so its means are
+//! not those of white noise (battery tune #65: a 7.3 m step under a 2 Hz
+//! receiver, 0.18 m/s of shift against 0.04 m/s of white σ). The detector
+//! then re-anchors on the fix: the episode flags the seconds the
+//! confirmation takes, not the coast limit.
+use serde::{Deserialize, Serialize};
+
+/// Span of `z` before the jump that its level is taken over, s.
+const BEFORE_S: f64 = 2.0;
+/// Entries kept (a 20 Hz receiver's `BEFORE_S` with room).
+const CAP: usize = 64;
+/// After the jump: at least this span and this many entries before a
+/// verdict, s; none after `GIVE_UP_S`. Two seconds hold three fixes of a
+/// 1 Hz receiver, so its σ is learnt too, not left at the prior.
+const AFTER_S: f64 = 2.0;
+const MIN_AFTER: u32 = 3;
+const GIVE_UP_S: f64 = 4.0;
+/// Shift of the mean along the jump, in σ of the difference of means.
+const Z: f64 = 3.0;
+/// Floor of one entry's σ, m/s.
+const SIGMA_FLOOR: f64 = 0.05;
+/// Shortest drag the shift and the jump imply, s.
+const MIN_AGE_S: f64 = 5.0;
+/// The learnt shift's RMS: prior (counted as `PRIOR_N` shifts), m/s, and
+/// the forgetting factor once learnt.
+const SHIFT_SIGMA0: f64 = 0.15;
+const PRIOR_N: f64 = 5.0;
+const ALPHA: f64 = 0.01;
+
+/// An armed confirmation: the jump and both sides' sums along it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Pending {
+    /// Time of the jump, s.
+    t0: f64,
+    /// Unit direction of the jump (N, E) and its length, m.
+    u: [f64; 2],
+    len: f64,
+    /// Entries before the jump: count, mean and sum of squared deviations
+    /// of `z` along `u`.
+    n_b: f64,
+    mean_b: f64,
+    ss_b: f64,
+    /// Entries from the jump on: count, sum and sum of squares along `u`.
+    n_a: f64,
+    sum_a: f64,
+    sum2_a: f64,
+}
+
+/// See the module docs. Times in true s from the detector.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DragEnd {
+    /// Recent `(t, z)` entries, oldest first.
+    recent: Vec<(f64, [f64; 2])>,
+    pending: Option<Pending>,
+    /// Learnt mean square of the shift on normal epochs, (m/s)², and the
+    /// shifts learnt from (NaN before the first: the prior).
+    ms: f64,
+    learnt: f64,
+}
+
+impl Default for DragEnd {
+    fn default() -> Self {
+        DragEnd { recent: Vec::new(), pending: None, ms: SHIFT_SIGMA0 * SHIFT_SIGMA0, learnt: 0.0 }
+    }
+}
+
+impl DragEnd {
+    /// This GPS epoch's `z` at `t` (None: no usable velocity or IMU, which
+    /// restarts everything).
+    pub fn push(&mut self, t: f64, z: Option<[f64; 2]>) {
+        let Some(z) = z.filter(|z| t.is_finite() && z.iter().all(|x| x.is_finite())) else {
+            self.recent.clear();
+            self.pending = None;
+            return;
+        };
+        if self.recent.last().is_some_and(|(tl, _)| t < *tl) {
+            self.recent.clear();
+        }
+        let keep_from = self.recent.iter().position(|(ti, _)| t - ti <= BEFORE_S + 1.0).unwrap_or(self.recent.len());
+        self.recent.drain(..keep_from);
+        if self.recent.len() >= CAP {
+            self.recent.remove(0);
+        }
+        self.recent.push((t, z));
+        if let Some(p) = self.pending.as_mut() {
+            let x = z[0] * p.u[0] + z[1] * p.u[1];
+            p.n_a += 1.0;
+            p.sum_a += x;
+            p.sum2_a += x * x;
+        }
+    }
+
+    /// A position episode opened at this epoch (`t`, the last `push`) on a
+    /// jump of the position off its velocity track, `jump` (N, E, m): arm
+    /// the confirmation. The newest entry is the first after the jump.
+    pub fn arm(&mut self, t: f64, jump: [f64; 2]) {
+        self.pending = None;
+        let len = (jump[0] * jump[0] + jump[1] * jump[1]).sqrt();
+        let Some(&(tn, zn)) = self.recent.last() else { return };
+        if !(len > 0.0 && len.is_finite()) || tn != t {
+            return;
+        }
+        let u = [jump[0] / len, jump[1] / len];
+        let along = |z: &[f64; 2]| z[0] * u[0] + z[1] * u[1];
+        let before: Vec<f64> = self.recent[..self.recent.len() - 1].iter().filter(|(ti, _)| t - ti <= BEFORE_S).map(|(_, z)| along(z)).collect();
+        if before.len() < 2 {
+            return;
+        }
+        let n_b = before.len() as f64;
+        let mean_b = before.iter().sum::<f64>() / n_b;
+        let ss_b = before.iter().map(|x| (x - mean_b) * (x - mean_b)).sum();
+        let x = along(&zn);
+        self.pending = Some(Pending { t0: t, u, len, n_b, mean_b, ss_b, n_a: 1.0, sum_a: x, sum2_a: x * x });
+    }
+
+    /// Whether the armed jump is now confirmed as a drag-off's end.
+    /// `flown`: time flown, s; the drag cannot be older. Judged once, at the
+    /// first epoch `AFTER_S` and `MIN_AFTER` entries past the jump (the
+    /// shape the learnt σ measures: a longer wait lets `z`'s slow drift,
+    /// the accelerometer bias integrated, pass for a shift), then disarmed;
+    /// given up `GIVE_UP_S` after the jump.
+    pub fn confirmed(&mut self, t: f64, flown: f64) -> bool {
+        let Some(p) = self.pending else { return false };
+        if t - p.t0 > GIVE_UP_S {
+            self.pending = None;
+            return false;
+        }
+        if t - p.t0 < AFTER_S || p.n_a < MIN_AFTER as f64 {
+            return false;
+        }
+        self.pending = None;
+        let mean_a = p.sum_a / p.n_a;
+        let ss_a = (p.sum2_a - p.n_a * mean_a * mean_a).max(0.0);
+        let var = ((p.ss_b + ss_a) / (p.n_b + p.n_a - 2.0)).max(SIGMA_FLOOR * SIGMA_FLOOR);
+        let sigma = (var * (1.0 / p.n_b + 1.0 / p.n_a)).sqrt().max(self.ms.sqrt());
+        let shift = mean_a - p.mean_b;
+        let age = p.len / shift;
+        shift > Z * sigma && (MIN_AGE_S..=flown).contains(&age)
+    }
+
+    /// A normal epoch: learn the RMS of the shift a confirmation measures,
+    /// the mean of `z` over the last `AFTER_S` against the `BEFORE_S`
+    /// before, per axis (winsorised at 3σ; a running mean from the prior at
+    /// first, then forgetting at `ALPHA`).
+    pub fn learn(&mut self) {
+        let Some(&(tn, _)) = self.recent.last() else { return };
+        // After: the last `AFTER_S` with its newest entry, as a confirmation
+        // takes the jump's epoch and the `AFTER_S` past it; before: the
+        // `BEFORE_S` ahead of that.
+        let mean = |inside: &dyn Fn(f64) -> bool| {
+            let (mut n, mut s) = (0.0, [0.0; 2]);
+            for (_, z) in self.recent.iter().filter(|(t, _)| inside(tn - t)) {
+                n += 1.0;
+                s[0] += z[0];
+                s[1] += z[1];
+            }
+            (n >= 2.0).then(|| [s[0] / n, s[1] / n])
+        };
+        let after = mean(&|age| age <= AFTER_S);
+        let before = mean(&|age| age > AFTER_S && age <= AFTER_S + BEFORE_S);
+        let (Some(a), Some(b)) = (after, before) else { return };
+        let lim = 9.0 * self.ms;
+        for k in 0..2 {
+            let x = ((a[k] - b[k]) * (a[k] - b[k])).min(lim);
+            self.learnt += 1.0;
+            let w = (1.0 / (self.learnt + PRIOR_N)).max(ALPHA);
+            self.ms += w * (x - self.ms);
+        }
+    }
+
+    /// Disarm (the episode ended or the filter re-anchored).
+    pub fn disarm(&mut self) {
+        self.pending = None;
+    }
+
+    /// A confirmation is armed.
+    pub fn armed(&self) -> bool {
+        self.pending.is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    /// 5 Hz entries with white noise `sd` around `level(t)` along N.
+    fn feed(d: &mut DragEnd, rng: &mut Rng, t0: f64, t1: f64, sd: f64, level: f64) {
+        let mut t = t0;
+        while t < t1 - 1e-9 {
+            d.push(t, Some([level + sd * rng.normal(), 0.3 * rng.normal()]));
+            t += 0.2;
+        }
+    }
+
+    #[test]
+    fn a_velocity_shift_along_the_jump_confirms_a_return() {
+        let (mut d, mut rng) = (DragEnd::default(), Rng::new(1));
+        feed(&mut d, &mut rng, 0.0, 10.0, 0.3, 0.0);
+        // A 0.8 m/s drag for 20 s ends: position back by 16 m north,
+        // velocity back by 0.8 m/s along it.
+        d.push(10.0, Some([0.8, 0.0]));
+        d.arm(10.0, [16.0, 0.0]);
+        let mut at = None;
+        let mut t = 10.2;
+        while t < 14.0 {
+            d.push(t, Some([0.8 + 0.3 * rng.normal(), 0.3 * rng.normal()]));
+            if d.confirmed(t, 100.0) {
+                at = Some(t);
+                break;
+            }
+            t += 0.2;
+        }
+        let at = at.expect("confirmed");
+        assert!(at <= 12.3, "confirmed at {at}");
+        assert!(!d.armed());
+    }
+
+    #[test]
+    fn a_step_onset_leaves_the_velocity_and_is_not_confirmed() {
+        for seed in 1..30 {
+            let (mut d, mut rng) = (DragEnd::default(), Rng::new(seed));
+            feed(&mut d, &mut rng, 0.0, 10.0, 0.3, 0.2);
+            d.push(10.0, Some([0.2 + 0.3 * rng.normal(), 0.0]));
+            d.arm(10.0, [10.0, 0.0]);
+            let mut t = 10.2;
+            while t < 15.0 {
+                d.push(t, Some([0.2 + 0.3 * rng.normal(), 0.3 * rng.normal()]));
+                assert!(!d.confirmed(t, 100.0), "seed {seed}: confirmed at {t}");
+                t += 0.2;
+            }
+            assert!(!d.armed(), "gave up");
+        }
+    }
+
+    #[test]
+    fn a_receiver_whose_velocity_wanders_teaches_a_larger_sigma() {
+        // Gauss–Markov velocity error (σ 0.2 m/s, τ 5 s) at 2 Hz: the means
+        // over seconds wander by far more than the white part says.
+        let (mut d, mut rng) = (DragEnd::default(), Rng::new(6));
+        let (mut gm, mut t) = (0.0, 0.0);
+        let phi = (-0.5f64 / 5.0).exp();
+        while t < 300.0 {
+            gm = phi * gm + 0.2 * (1.0 - phi * phi).sqrt() * rng.normal();
+            d.push(t, Some([gm + 0.02 * rng.normal(), 0.0]));
+            d.learn();
+            t += 0.5;
+        }
+        // White noise of 0.02 m/s would give 0.02·√(1/2 + 1/4) ≈ 0.017.
+        let sigma = d.ms.sqrt();
+        assert!(sigma > 0.05 && sigma < 0.15, "learnt {sigma}");
+    }
+
+    #[test]
+    fn a_shift_too_large_for_the_jump_is_no_drag() {
+        // 2 m of jump with 1 m/s of shift: a 2 s drag, shorter than any.
+        let (mut d, mut rng) = (DragEnd::default(), Rng::new(4));
+        feed(&mut d, &mut rng, 0.0, 10.0, 0.1, 0.0);
+        d.push(10.0, Some([1.0, 0.0]));
+        d.arm(10.0, [2.0, 0.0]);
+        let mut t = 10.2;
+        while t < 15.0 {
+            d.push(t, Some([1.0 + 0.1 * rng.normal(), 0.0]));
+            assert!(!d.confirmed(t, 100.0));
+            t += 0.2;
+        }
+    }
+
+    #[test]
+    fn a_missing_entry_disarms_and_arming_needs_the_jump_epoch() {
+        let (mut d, mut rng) = (DragEnd::default(), Rng::new(2));
+        feed(&mut d, &mut rng, 0.0, 10.0, 0.3, 0.0);
+        d.arm(11.0, [10.0, 0.0]);
+        assert!(!d.armed(), "no entry at 11 s");
+        d.push(10.0, Some([0.5, 0.0]));
+        d.arm(10.0, [10.0, 0.0]);
+        assert!(d.armed());
+        d.push(10.2, None);
+        assert!(!d.armed());
+    }
+}
+
+/// The snapshot codec of this file's state types ([`crate::codec`]).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(Pending { t0, u, len, n_b, mean_b, ss_b, n_a, sum_a, sum2_a });
+    impl_codec!(DragEnd { recent, pending, ms, learnt });
+}
