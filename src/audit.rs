@@ -269,6 +269,10 @@ struct Tally {
     flagged_epochs: u64,
     /// Inputs seen at least once: GPS, IMU, attitude, baro.
     seen: [bool; 4],
+    /// Spans the detector called the vehicle upset (`kind::UPSET`), s, and
+    /// whether the last row was one.
+    upsets: Vec<Gap>,
+    in_upset: bool,
 }
 
 impl Tally {
@@ -289,6 +293,8 @@ impl Tally {
             gps_fixes: 0,
             flagged_epochs: 0,
             seen: [false; 4],
+            upsets: vec![],
+            in_upset: false,
         })
     }
 
@@ -324,6 +330,15 @@ impl Tally {
             self.flagged_epochs += 1;
         }
         track(&mut self.open, &mut self.faults, &o, &self.det);
+        let upset = o.kind == kind::UPSET;
+        if upset && self.in_upset {
+            if let Some(u) = self.upsets.last_mut() {
+                u.end = o.t;
+            }
+        } else if upset && self.upsets.len() < MAX_LISTED {
+            self.upsets.push(Gap { start: o.t, end: o.t });
+        }
+        self.in_upset = upset;
         self.metrics.push(o.t, s.label, o.status);
         Some(o)
     }
@@ -334,7 +349,7 @@ impl Tally {
     }
 
     fn report(self, format: &'static str, missing: Vec<String>, meta: Vec<(String, String)>) -> Report {
-        let Tally { det, metrics, mut warnings, bad_rows, mut faults, mut open, gaps, first_t, last_t, rows, gps_reports, gps_fixes, flagged_epochs, .. } = self;
+        let Tally { det, metrics, mut warnings, bad_rows, mut faults, mut open, gaps, first_t, last_t, rows, gps_reports, gps_fixes, flagged_epochs, upsets, .. } = self;
         if let Some(iv) = open.take() {
             faults.push(iv.closed());
         }
@@ -354,6 +369,12 @@ impl Tally {
         }
         for g in &gaps {
             warnings.push(format!("data gap: no rows from {:.2} s to {:.2} s (logging pause, not a navigation fault)", g.start, g.end));
+        }
+        for u in &upsets {
+            warnings.push(format!(
+                "vehicle upset: tilted past 90 deg from {:.2} s to {:.2} s (a crash or a flip, not a sensor fault); the sensors were not judged there",
+                u.start, u.end
+            ));
         }
         let duration = match (first_t, last_t) {
             (Some(a), Some(b)) => b - a,

@@ -788,7 +788,7 @@ function renderTrack(p) {
   const data = [
     null,
     [tr.e, tr.n],
-    split((i) => tr.kind[i] === 0 || (tr.kind[i] === 3)),
+    split((i) => tr.kind[i] === 0 || tr.kind[i] === 3 || tr.kind[i] === 6),
     split((i) => tr.kind[i] === 1),
     split((i) => tr.kind[i] === 2),
     [[], []], // zoom window highlight

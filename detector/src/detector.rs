@@ -79,7 +79,22 @@ pub mod kind {
     /// or fewer, or an accuracy claim `QUALITY_DECLARED` times its usual
     /// (see `ReceiverQuality::declares_degraded`).
     pub const DEGRADED: u8 = 5;
+    /// No verdict possible: the vehicle is upset (tilted past 90°, a crash
+    /// or a flip) or was within the last `UPSET_HOLD_S`. The strapdown
+    /// prediction cannot judge the sensors then, and every GPS epoch
+    /// re-anchors the filter. Status 0, as for [`NO_GPS`].
+    pub const UPSET: u8 = 6;
 }
+
+/// Tilt beyond which the vehicle is upset: the cosine of the angle between
+/// the body's down axis and the local down (90°: the down axis horizontal
+/// or above it). No flight the battery draws banks past 50°; the real
+/// crashes in the shared logs reach 134–177°.
+const UPSET_COS_TILT: f64 = 0.0;
+/// Verdicts stay suspended this long after the last upset IMU sample, s: a
+/// crash tumbles on (the shared ArduCopter crashes: from the first sample
+/// past 90° to the autopilot's CRASH_CHECK, 2.3–3.7 s).
+const UPSET_HOLD_S: f64 = 5.0;
 
 /// Per-row output.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -360,6 +375,9 @@ pub struct Detector {
     last_ind: Indicators,
     stats: Stats,
     oracle: bool,
+    /// Boot time (s) until which the vehicle counts as upset (see
+    /// [`kind::UPSET`]); NaN when it never was.
+    upset_until: f64,
 }
 
 /// A GPS fix in the local frame.
@@ -1839,6 +1857,7 @@ impl Detector {
             last_ind: Indicators::default(),
             stats: Stats::default(),
             oracle: false,
+            upset_until: f64::NAN,
             cfg,
         }
     }
@@ -2103,6 +2122,11 @@ impl Detector {
     fn hold_imu(&mut self, t: f64, s: &Sample) {
         if s.has_accel() && s.has_attitude() {
             if let Some(q) = quat_from_wxyz(s.qw, s.qx, s.qy, s.qz) {
+                // R₃₃ of body→NED: the body's down axis on the local down.
+                let (x, y) = (q.quaternion().i, q.quaternion().j);
+                if 1.0 - 2.0 * (x * x + y * y) <= UPSET_COS_TILT {
+                    self.upset_until = t + UPSET_HOLD_S;
+                }
                 self.imu = Some((t, ImuInput { f_body: Vector3::new(s.ax, s.ay, s.az), q }));
                 self.stats.imu_rows += 1;
                 let psd = self.imu_noise.learn(t, [s.ax, s.ay, s.az]);
@@ -2258,7 +2282,10 @@ impl Detector {
             self.consistency.track.rebase_axis(0);
             self.consistency.track.rebase_axis(1);
         }
-        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end);
+        // An upset vehicle (see `kind::UPSET`): nothing is judged, and the
+        // filter re-anchors at every epoch until it is over.
+        let upset = fix.t <= self.upset_until;
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end || upset);
         let was_active = self.episode.active;
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
@@ -2312,7 +2339,13 @@ impl Detector {
             f: verdict.f,
             r: ind.r,
             c: ind.c,
-            kind: if step.fault { kind::RESIDUAL } else { kind::NORMAL },
+            kind: if upset && !self.oracle {
+                kind::UPSET
+            } else if step.fault {
+                kind::RESIDUAL
+            } else {
+                kind::NORMAL
+            },
             gps_epoch: true,
             driver: ind.r_driver().map_or(255, |g| g as u8),
         }
@@ -3044,7 +3077,7 @@ mod codec_impls {
     impl_codec!(Output { t, status, f, r, c, kind, gps_epoch, driver });
     impl_codec!(Stats { rows, gps_epochs, imu_rows, baro_rows, retrains, filter_resets, data_gaps, filter_errors });
     impl_codec!(Ring { buf, head, len });
-    impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle });
+    impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until });
     impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run, declared, acquired });
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd });

@@ -122,8 +122,8 @@ export interface NavguardModel {
   d2: [number, number][];
   provenance?: string;
 }
-/** kind: 0 normal, 1 residual fault, 2 GPS outage, 3 no GPS yet, 4 GPS output frozen (the receiver repeats its last fix), 5 GPS degraded by the receiver's own word (2D fix, four satellites or fewer, or an accuracy claim 3x its usual). */
-export interface PushResult { t: number; status: 0 | 1; f: number; r: number; c: number; kind: 0 | 1 | 2 | 3 | 4 | 5; gpsEpoch: boolean }
+/** kind: 0 normal, 1 residual fault, 2 GPS outage, 3 no GPS yet, 4 GPS output frozen (the receiver repeats its last fix), 5 GPS degraded by the receiver's own word (2D fix, four satellites or fewer, or an accuracy claim 3x its usual), 6 vehicle upset (tilted past 90 deg, a crash or a flip: nothing judged until 5 s after it; status 0). */
+export interface PushResult { t: number; status: 0 | 1; f: number; r: number; c: number; kind: 0 | 1 | 2 | 3 | 4 | 5 | 6; gpsEpoch: boolean }
 export interface ColumnsResult { status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array }
 export interface DetectorStats { rows: number; gpsEpochs: number; imuRows: number; baroRows: number; retrains: number; filterResets: number; dataGaps: number; filterErrors: number }
 export interface SnapshotInfo { version: number; crateVersion: string; bytes: number }
