@@ -35,8 +35,10 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // with the module (.ci/build: -Z build-std, panic=immediate-abort, so no
 // panic message formatting), it is 366 KB: the row path, the readers,
 // audits and the facade make up the rest (README, Speed and size). Lower
-// this as the core shrinks (about 1% over the measured size, 365,798 B).
-const CORE_WASM_BUDGET = 369_500;
+// this as the core shrinks (about 1% over the measured size, 370,443 B
+// with session 8's altitude vote, drag-off end and upset gate, which add
+// 4.6 KB to size6's 365,798 B).
+const CORE_WASM_BUDGET = 374_200;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;
