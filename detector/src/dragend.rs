@@ -31,8 +31,9 @@ use serde::{Deserialize, Serialize};
 
 /// Span of `z` before the jump that its level is taken over, s.
 const BEFORE_S: f64 = 2.0;
-/// Entries kept (a 20 Hz receiver's `BEFORE_S` with room).
-const CAP: usize = 64;
+/// Entries kept: a 20 Hz receiver's `AFTER_S + BEFORE_S`, which `learn`
+/// spans, with room.
+const CAP: usize = 96;
 /// After the jump: at least this span and this many entries before a
 /// verdict, s; none after `GIVE_UP_S`. Two seconds hold three fixes of a
 /// 1 Hz receiver, so its σ is learnt too, not left at the prior.
@@ -100,7 +101,7 @@ impl DragEnd {
         if self.recent.last().is_some_and(|(tl, _)| t < *tl) {
             self.recent.clear();
         }
-        let keep_from = self.recent.iter().position(|(ti, _)| t - ti <= BEFORE_S + 1.0).unwrap_or(self.recent.len());
+        let keep_from = self.recent.iter().position(|(ti, _)| t - ti <= AFTER_S + BEFORE_S).unwrap_or(self.recent.len());
         self.recent.drain(..keep_from);
         if self.recent.len() >= CAP {
             self.recent.remove(0);
@@ -273,6 +274,26 @@ mod tests {
         // White noise of 0.02 m/s would give 0.02·√(1/2 + 1/4) ≈ 0.017.
         let sigma = d.ms.sqrt();
         assert!(sigma > 0.05 && sigma < 0.15, "learnt {sigma}");
+    }
+
+    #[test]
+    fn the_learnt_shift_spans_the_full_window_before_at_20_hz() {
+        // z at 0 for 1 s, then at 1 m/s for 3 s: over the last 2 s against
+        // the 2 s before them, a shift of 0.5 (one axis). A ring that kept
+        // only 3 s saw the before-window's last second alone, at 1: no shift.
+        let mut d = DragEnd::default();
+        let mut t = 0.0;
+        while t < 4.0 - 1e-9 {
+            d.push(t, Some([if t < 1.0 - 1e-9 { 0.0 } else { 1.0 }, 0.0]));
+            t += 0.05;
+        }
+        assert!(d.recent.len() == 80 && d.recent[0].0 == 0.0, "{} entries from {} s", d.recent.len(), d.recent[0].0);
+        d.learn();
+        // Axis N: 0.25 winsorised at 9σ² = 0.2025, weight 1/6; axis E: 0,
+        // weight 1/7.
+        let prior = SHIFT_SIGMA0 * SHIFT_SIGMA0;
+        let expect = (prior + (9.0 * prior - prior) / 6.0) * 6.0 / 7.0;
+        assert!((d.ms - expect).abs() < 1e-12, "{} against {expect}", d.ms);
     }
 
     #[test]
