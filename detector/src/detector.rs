@@ -298,6 +298,9 @@ const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a 
 /// R: the call lands just above the ANFIS boundary (R ≈ 2.55).
 const VOTE_Z: f64 = 4.0;
 const VOTE_R_SCALE: f64 = 2.8 / VOTE_Z;
+/// Share of a called departure that may remain when both references jump
+/// back: the fault's end.
+const VOTE_BACK: f64 = 0.5;
 /// The baro drift statistic's scale into the baro group's R: its hold level
 /// (`drift::DRIFT_Z`) lands just above the ANFIS boundary (R ≈ 2.55).
 const DRIFT_R_SCALE: f64 = 2.8 / crate::drift::DRIFT_Z;
@@ -1155,13 +1158,27 @@ impl Consistency {
             (now / s, prev / s)
         };
         let ((bn, bp), (zn, zp)) = (zs(b), zs(z));
-        let back = |now: f64, prev: f64| prev.abs() > VOTE_Z && now * prev >= 0.0 && now.abs() < 0.5 * prev.abs() || now * prev < 0.0 && prev.abs() > VOTE_Z;
+        // Called at the last fix, and now back by more than half of it (or
+        // past its baseline).
+        let back = |now: f64, prev: f64| prev.abs() > VOTE_Z && (now * prev < 0.0 || now.abs() < VOTE_BACK * prev.abs());
         if bp * zp > 0.0 && back(bn, bp) && back(zn, zp) {
             self.baro_gps_level.rebase_axis(0);
             self.track.rebase_axis(2);
             return (0.0, true);
         }
         (if bn * zn > 0.0 { bn.abs().min(zn.abs()) } else { 0.0 }, false)
+    }
+
+    /// A position episode's jump confirmed, over the seconds after it, as
+    /// a drag-off's end (see `dragend`): the track's level moved with the
+    /// truth's return, so its baseline moves to the fix.
+    fn drag_ended(&mut self, t: f64, episode_active: bool) -> bool {
+        let ended = episode_active && self.drag_end.confirmed(t, self.flight_time);
+        if ended {
+            self.track.rebase_axis(0);
+            self.track.rebase_axis(1);
+        }
+        ended
     }
 
     /// A position episode that opened at this epoch (`opened_on_position`)
@@ -2274,14 +2291,7 @@ impl Detector {
         // altitude back onto both the baro and its own vertical velocity
         // integrated after they both condemned it (`altitude_vote`).
         let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back;
-        // A position episode's jump confirmed as a drag-off's end over the
-        // seconds after it (see `dragend`): the track's level moved with the
-        // truth's return.
-        let drag_end = self.episode.active && self.consistency.drag_end.confirmed(fix.t, self.consistency.flight_time);
-        if drag_end {
-            self.consistency.track.rebase_axis(0);
-            self.consistency.track.rebase_axis(1);
-        }
+        let drag_end = self.consistency.drag_ended(fix.t, self.episode.active);
         // An upset vehicle (see `kind::UPSET`): nothing is judged, and the
         // filter re-anchors at every epoch until it is over.
         let upset = fix.t <= self.upset_until;
