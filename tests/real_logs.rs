@@ -1,14 +1,13 @@
 //! Native tests over the real logs in ../shared/data (see its README).
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
+use common::data;
+
 use navguard::audit::audit;
 use navguard::config::Config;
 use navguard::logs::read_any;
-
-fn data(p: &str) -> Vec<u8> {
-    let path = format!("{}/../shared/data/{p}", env!("CARGO_MANIFEST_DIR"));
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
-}
 
 #[test]
 fn every_log_is_recognised_by_content() {

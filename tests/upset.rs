@@ -5,16 +5,15 @@
 //! flagged outside known events).
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
+use common::data;
+
 use navguard::audit::audit;
 use navguard::detector::kind;
 use navguard::logs::read_any;
 use navguard::sim::{simulate, Scenario, Trajectory};
 use navguard::{Config, Detector};
-
-fn data(p: &str) -> Vec<u8> {
-    let path = format!("{}/../shared/data/{p}", env!("CARGO_MANIFEST_DIR"));
-    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
-}
 
 /// A survey flight whose attitude reads upside down (roll 180°) from 60 to 63 s:
 /// its GPS epochs are "upset" until 5 s after the last such sample, then

@@ -1,4 +1,6 @@
-//! Helpers shared by the battery regression tests (native only).
+//! Helpers shared by the native integration tests: the battery regression
+//! tests and the real-log tests. Each test file uses some of them.
+#![allow(dead_code)]
 use navguard::battery::{self, Flight};
 use navguard::{Config, Detector};
 
@@ -14,4 +16,10 @@ pub fn flagged_after(f: &Flight, len: f64) -> (usize, usize) {
         .map(|(_, st)| st)
         .collect();
     (after.iter().filter(|st| **st != 0).count(), after.len())
+}
+
+/// The bytes of a shared real log, `p` relative to `../shared/data`.
+pub fn data(p: &str) -> Vec<u8> {
+    let path = format!("{}/../shared/data/{p}", env!("CARGO_MANIFEST_DIR"));
+    std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
