@@ -1,12 +1,18 @@
 //! Trace one battery flight: `bprobe tune|eval INDEX [IMU_HZ]` prints each
-//! GPS epoch (optionally with the flight's IMU at another rate).
+//! GPS epoch (optionally with the flight's IMU at another rate);
+//! `bprobe check C I` traces instance `I` of the specific check `C`
+//! (`battery::CHECKS`).
 use navguard::{battery, config::Config, detector::Detector};
 
 fn main() {
     let a: Vec<String> = std::env::args().collect();
-    let split = battery::Split::parse(&a[1]).unwrap();
-    let mut f = battery::Flight::draw(split, a[2].parse().unwrap());
-    if let Some(hz) = a.get(3) {
+    let mut f = if a[1] == "check" {
+        let c: usize = a[2].parse().unwrap();
+        battery::CHECKS[c].flight(c, a[3].parse().unwrap())
+    } else {
+        battery::Flight::draw(battery::Split::parse(&a[1]).unwrap(), a[2].parse().unwrap())
+    };
+    if let Some(hz) = a.get(3).filter(|_| a[1] != "check") {
         f = f.with_imu_rate(hz.parse().unwrap());
     }
     println!("# {}\n# {:?}", f.describe(), f.baro);
