@@ -267,6 +267,14 @@ const IMU_TIMEOUT: f64 = 0.25; // s: older IMU is not used for prediction
 /// ground's (on the real Loiter log, take-off alone reaches 3–6).
 const IMU_ARM_S: f64 = 20.0;
 const IMU_ARM_WINDOWS: u32 = 50;
+/// The IMU consistency judges only an IMU logged at least this often, s
+/// between samples (25 Hz): sparser records are snapshots of a fast sensor
+/// that integrate a turn's changing acceleration poorly (the shared
+/// ArduPlane log's 10 Hz IMU: 4 `imu` intervals, 7.2 s, on healthy banked
+/// legs at 12–16 m/s). The battery's IMUs run at 50–400 Hz.
+const IMU_MAX_PERIOD_S: f64 = 0.04;
+/// s: time constant of the IMU's sample interval estimate.
+const IMU_PERIOD_TAU_S: f64 = 5.0;
 /// An IMU episode ends when z's change over the last `IMU_RECENT_S` s stays
 /// below `IMU_CALM` σ for `RECOVER_EPOCHS` epochs. A 0.3 m/s² bias moves z by
 /// about 3σ in that second.
@@ -625,6 +633,9 @@ struct ImuNoise {
     /// Previous sample (t s, specific force m/s²).
     prev: Option<(f64, [f64; 3])>,
     psd: f64,
+    /// The samples' interval, s (an exponential mean over
+    /// `IMU_PERIOD_TAU_S`; 0 before two samples).
+    period: f64,
 }
 
 impl ImuNoise {
@@ -635,6 +646,10 @@ impl ImuNoise {
             if dt > 0.0 && dt < 0.5 {
                 let ms = (0..3).map(|a| (f[a] - fp[a]).powi(2)).sum::<f64>() / 6.0;
                 self.psd += (dt / IMU_PSD_TAU).min(1.0) * (ms * dt - self.psd);
+                // A dropped stretch of records is not the logging rate.
+                if dt <= IMU_MAX_PERIOD_S * 6.0 {
+                    self.period = if self.period > 0.0 { self.period + (dt / IMU_PERIOD_TAU_S).min(1.0) * (dt - self.period) } else { dt };
+                }
             }
         }
         self.prev = Some((t, f));
@@ -1216,7 +1231,9 @@ impl Consistency {
     /// `learn_rate`: the receiver is trusted enough to teach the clock rate.
     /// Also returns whether the GPS altitude came back onto both its other
     /// references at this fix (see `altitude_vote`).
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool) -> (Indicators, bool) {
+    /// `imu_dense`: the IMU is logged often enough to judge (see
+    /// `IMU_MAX_PERIOD_S`).
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool, imu_dense: bool) -> (Indicators, bool) {
         let (t, y) = (fix.t, fix.y);
         // The receiver's own time, when the log has it, measures the clock
         // whatever the vehicle does (inside episodes too).
@@ -1289,7 +1306,7 @@ impl Consistency {
         // The same `z` measures a drag-off's end (see `dragend`); an IMU gap
         // left changes out of `dv_imu`, so it restarts there.
         self.drag_end.push(t, z.filter(|_| !imu_gap && !vel_withheld));
-        ind.set_imu_fold(self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
+        ind.set_imu_fold(imu_dense && self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).
         out.fold(0, ramp * RAMP_R_SCALE);
@@ -2271,7 +2288,8 @@ impl Detector {
         // does not average out over headings and taught the clock a wrong
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
-        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared);
+        let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
+        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared, imu_dense);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -2893,6 +2911,25 @@ mod tests {
     }
 
     #[test]
+    fn the_imu_period_is_its_logging_rate_and_dropouts_do_not_count() {
+        let f = [0.0, 0.0, -9.81];
+        // 200 Hz with a 0.2 s and a 2 s dropout: still dense.
+        let mut n = ImuNoise::default();
+        let mut t = 0.0;
+        for k in 0..4000 {
+            n.learn(t, f);
+            t += if k == 1000 { 0.2 } else if k == 2000 { 2.0 } else { 0.005 };
+        }
+        assert!((n.period - 0.005).abs() < 1e-3 && n.period <= IMU_MAX_PERIOD_S, "{}", n.period);
+        // 10 Hz: sparse.
+        let mut n = ImuNoise::default();
+        for k in 0..600 {
+            n.learn(k as f64 * 0.1, f);
+        }
+        assert!((n.period - 0.1).abs() < 1e-9 && n.period > IMU_MAX_PERIOD_S, "{}", n.period);
+    }
+
+    #[test]
     fn the_clock_rate_is_learnt_from_gps_displacement_against_integrated_velocity() {
         // A vehicle circling at 12 m/s, stamped by a boot clock at 0.923×:
         // boot intervals are 0.923 of true ones, so the GPS moves 1/0.923
@@ -3090,7 +3127,7 @@ mod codec_impls {
     impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until });
     impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run, declared, acquired });
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
-    impl_codec!(ImuNoise { prev, psd });
+    impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });
     impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
