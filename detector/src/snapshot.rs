@@ -60,8 +60,8 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// (`drift::DriftTest`). 11: the position's ramp test off its velocity
 /// track (`ramp::RampTest`). 12: the two share one window (`window::Window`).
 /// 13: their statistics are no longer kept between epochs. 14: the
-/// horizontal drag-off's end confirmation (`dragend::DragEnd`) and the
-/// vehicle-upset gate (`kind::UPSET`).
+/// horizontal drag-off's end confirmation (`dragend::DragEnd`), the
+/// vehicle-upset gate (`kind::UPSET`) and the IMU's sample interval.
 pub const VERSION: u32 = 14;
 
 #[derive(Clone)]
