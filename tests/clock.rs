@@ -95,7 +95,9 @@ fn the_ardupilot_logs_clock_rate_agrees_with_pymavlink() {
 }
 
 /// The plane's first fast leg flagged 11.7% of the flight before its clock
-/// was learnt from motion (at ~340 s).
+/// was learnt from motion (at ~340 s); 8.1% since its 10 Hz IMU no longer
+/// judges the GPS (session 8), the rest being the clock's ramp in the
+/// position tests.
 #[test]
 fn the_planes_fast_legs_are_no_longer_flagged_for_its_clock() {
     let path = format!("{}/../shared/data/ardupilot/erle_plane_4-12-2014_329.BIN", env!("CARGO_MANIFEST_DIR"));
@@ -103,7 +105,7 @@ fn the_planes_fast_legs_are_no_longer_flagged_for_its_clock() {
     let (ep, _) = verdicts(&log.samples);
     let (ep0, _) = verdicts(&without_gps_time(&log.samples));
     let (now, before) = (flagged_share(&ep), flagged_share(&ep0));
-    assert!(now < 0.04 && before > 0.10, "flagged {:.2}% with gps_time, {:.2}% without", 100.0 * now, 100.0 * before);
+    assert!(now < 0.01 && before > 0.05, "flagged {:.2}% with gps_time, {:.2}% without", 100.0 * now, 100.0 * before);
 }
 
 /// The battery writes `gps_time` (receiver time = epoch + true time, to the
