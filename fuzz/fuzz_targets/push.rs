@@ -196,7 +196,7 @@ fuzz_target!(|data: &[u8]| {
             let before = det.stats();
             match det.push(&s) {
                 Ok(o) => {
-                    assert!(o.status <= 1 && o.kind <= kind::DEGRADED, "{o:?}");
+                    assert!(o.status <= 1 && o.kind <= kind::UPSET, "{o:?}");
                     assert!(o.t == s.t, "output time {} for row time {}", o.t, s.t);
                     assert!(!o.f.is_nan() || o.kind == kind::NO_GPS, "F is NaN on a verdict row: {o:?} for {s:?}");
                 }
