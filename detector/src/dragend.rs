@@ -127,13 +127,13 @@ impl DragEnd {
         }
         let u = [jump[0] / len, jump[1] / len];
         let along = |z: &[f64; 2]| z[0] * u[0] + z[1] * u[1];
-        let before: Vec<f64> = self.recent[..self.recent.len() - 1].iter().filter(|(ti, _)| t - ti <= BEFORE_S).map(|(_, z)| along(z)).collect();
-        if before.len() < 2 {
+        let before = || self.recent[..self.recent.len() - 1].iter().filter(|(ti, _)| t - ti <= BEFORE_S).map(|(_, z)| along(z));
+        let n_b = before().count() as f64;
+        if n_b < 2.0 {
             return;
         }
-        let n_b = before.len() as f64;
-        let mean_b = before.iter().sum::<f64>() / n_b;
-        let ss_b = before.iter().map(|x| (x - mean_b) * (x - mean_b)).sum();
+        let mean_b = before().sum::<f64>() / n_b;
+        let ss_b = before().map(|x| (x - mean_b) * (x - mean_b)).sum();
         let x = along(&zn);
         self.pending = Some(Pending { t0: t, u, len, n_b, mean_b, ss_b, n_a: 1.0, sum_a: x, sum2_a: x * x });
     }

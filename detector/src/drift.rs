@@ -57,7 +57,7 @@
 use serde::{Deserialize, Serialize};
 
 pub use crate::window::Motion;
-use crate::window::{learn_ms, Entry, Window, SPAN_S, TAU_S};
+use crate::window::{learn_axes, sigma_of, Entry, Window, SPAN_S, TAU_S};
 
 /// σ prior and floor per reference (GPS altitude, Doppler integral), m: the
 /// GPS altitude wanders by metres over half a minute; the baro against the
@@ -136,9 +136,7 @@ impl DriftTest {
     }
 
     fn sigma(&self, k: usize) -> f64 {
-        let ms = if self.ms[k] > 0.0 { self.ms[k] } else { SIGMA0_M[k] * SIGMA0_M[k] };
-        let s = ms.sqrt().max(FLOOR_M[k]);
-        if k == 0 && self.claim_v > s { self.claim_v } else { s }
+        sigma_of(self.ms[k], SIGMA0_M[k], FLOOR_M[k], if k == 0 { self.claim_v } else { f64::NAN })
     }
 
     /// One GPS epoch `dt` true s after the last, with both levels (m), the
@@ -229,12 +227,8 @@ impl DriftTest {
         if !(self.last_span <= 1.5 * SPAN_S) {
             return;
         }
-        let w = (self.dt / TAU_S).min(1.0);
-        for k in 0..2 {
-            if self.last[k].is_finite() {
-                self.ms[k] = learn_ms(self.ms[k], self.last[k], self.sigma(k), w);
-            }
-        }
+        let sigma = [self.sigma(0), self.sigma(1)];
+        learn_axes(&mut self.ms, &self.last, sigma, (self.dt / TAU_S).min(1.0));
     }
 }
 

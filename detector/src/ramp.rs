@@ -30,7 +30,7 @@
 //! it rather than reading it as a step.
 use serde::{Deserialize, Serialize};
 
-use crate::window::{learn_ms, Entry, Window, SPAN_S, TAU_S};
+use crate::window::{learn_axes, learn_ms, sigma_of, Entry, Window, SPAN_S, TAU_S};
 
 /// Largest recent-to-window ratio of a ramp (a jump gives 2).
 const MAX_RATIO: f64 = 1.6;
@@ -107,9 +107,7 @@ impl RampTest {
     }
 
     fn sigma(&self, k: usize) -> f64 {
-        let ms = if self.ms[k] > 0.0 { self.ms[k] } else { SIGMA0_M[k] * SIGMA0_M[k] };
-        let s = ms.sqrt().max(FLOOR_M[k]);
-        if self.claim[k] > s { self.claim[k] } else { s }
+        sigma_of(self.ms[k], SIGMA0_M[k], FLOOR_M[k], self.claim[k])
     }
 
     /// One GPS epoch `dt` true s after the last, with the track's `d` (m,
@@ -217,11 +215,8 @@ impl RampTest {
         if !(self.last_span <= 1.5 * SPAN_S) || self.jumped() {
             return;
         }
-        for k in 0..2 {
-            if self.last[k].is_finite() {
-                self.ms[k] = learn_ms(self.ms[k], self.last[k], self.sigma(k), w);
-            }
-        }
+        let sigma = [self.sigma(0), self.sigma(1)];
+        learn_axes(&mut self.ms, &self.last, sigma, w);
     }
 }
 

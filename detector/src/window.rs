@@ -114,6 +114,26 @@ pub fn learn_ms(ms: f64, s: f64, sg: f64, w: f64) -> f64 {
     ms + w * ((s * s).min(9.0 * sg * sg) - ms)
 }
 
+/// σ (m) of a window test's axis: its learnt mean square `ms` (the prior
+/// `sigma0` before any), never below `floor` nor the receiver's accuracy
+/// `claim` (NaN when it gives none).
+pub fn sigma_of(ms: f64, sigma0: f64, floor: f64, claim: f64) -> f64 {
+    let ms = if ms > 0.0 { ms } else { sigma0 * sigma0 };
+    let s = ms.sqrt().max(floor);
+    if claim > s { claim } else { s }
+}
+
+/// A normal epoch's learning step on both axes of a window test: each
+/// finite change in `last` teaches its mean square in `ms`, winsorised at
+/// its σ in `sigma`, with weight `w`.
+pub fn learn_axes(ms: &mut [f64; 2], last: &[f64; 2], sigma: [f64; 2], w: f64) {
+    for k in 0..2 {
+        if last[k].is_finite() {
+            ms[k] = learn_ms(ms[k], last[k], sigma[k], w);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
