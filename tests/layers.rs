@@ -14,8 +14,8 @@ use std::path::Path;
 /// Modules the core builds on; none may reach a lab module. (The log
 /// readers and the row type are the crate `navguard-logs`, which cannot
 /// import navguard at all: cargo refuses the cycle.)
-const CORE: [&str; 19] = [
-    "anfis", "audit", "codec", "config", "detector", "dragend", "drift", "filter", "frames", "indicators", "methods", "metrics", "model",
+const CORE: [&str; 20] = [
+    "anfis", "audit", "codec", "config", "detector", "dragend", "drift", "flatline", "filter", "frames", "indicators", "methods", "metrics", "model",
     "ramp", "rng", "snapshot", "thresholds", "track", "window",
 ];
 /// Lab modules: simulators, the method comparison, training, tightly coupled.

@@ -59,6 +59,7 @@ use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolS
 pub use crate::model::{has_signature, Model};
 use crate::sample::{range_of, Sample};
 use crate::dragend::DragEnd;
+use crate::flatline::{self, Flatline};
 use crate::track::VelocityTrack;
 
 /// What kind of verdict a row carries.
@@ -315,6 +316,9 @@ const DRIFT_R_SCALE: f64 = 2.8 / crate::drift::DRIFT_Z;
 /// The position ramp statistic's scale into the position group's R, the
 /// same way (`ramp::RAMP_Z` just above the boundary).
 const RAMP_R_SCALE: f64 = 2.8 / crate::ramp::RAMP_Z;
+/// The baro flatline's z-score into the baro group's R, the same way
+/// (`flatline::Z` just above the boundary).
+const FLAT_R_SCALE: f64 = 2.8 / flatline::Z;
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
 const RECOVER_INC: f64 = 2.0;
@@ -813,6 +817,8 @@ struct Consistency {
     ramp: RampTest,
     /// The end of a horizontal drag-off, confirmed on the velocity's mean.
     drag_end: DragEnd,
+    /// The baro's reading held bit for bit (a stuck sensor, see `flatline`).
+    baro_flat: Flatline,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
     /// vertical velocity up m/s or NaN when it was not trusted).
     baro_epoch: Option<(f64, f64, f64)>,
@@ -1095,6 +1101,7 @@ impl Consistency {
             baro_drift: DriftTest::default(),
             ramp: RampTest::default(),
             drag_end: DragEnd::default(),
+            baro_flat: Flatline::default(),
             baro_epoch: None,
         }
     }
@@ -1316,6 +1323,11 @@ impl Consistency {
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
         let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
         out.fold(2, dep.max(drift * DRIFT_R_SCALE));
+        // The baro's reading held bit for bit while it still arrives (a
+        // baro that stops arriving is not judged on its last run).
+        if self.last_baro.is_some_and(|(tb, _)| t - tb < 0.5) {
+            out.fold(2, self.baro_flat.z() * FLAT_R_SCALE);
+        }
         // The GPS altitude off both other vertical references the same way:
         // the baro (its level against the GPS altitude) and the GPS's own
         // vertical velocity integrated (the track's down axis). Two of three
@@ -1323,6 +1335,10 @@ impl Consistency {
         // fault moves only the first, a vertical drag-off only the second.
         let (alt, alt_back) = self.altitude_vote(fix.epv);
         out.fold(0, alt * VOTE_R_SCALE);
+        // What these tests folded is the other tests' verdict, not the IMU's.
+        for g in [0, 2] {
+            ind.fold_unfolded(out.r_group[g]);
+        }
         (out, alt_back)
     }
 }
@@ -1915,6 +1931,7 @@ impl Detector {
             return Err(format!("D0: {} samples but {} labels", l.d0_x.len(), l.d0_y.len()));
         }
         crate::model::check_anfis(&l.anfis).map_err(|e| format!("anfis: {e}"))?;
+        self.consistency.baro_flat.check()?;
         for w in &self.methods.maha {
             w.check_shape()?;
         }
@@ -2071,6 +2088,7 @@ impl Detector {
         self.hold_imu(t, s);
         if s.has_baro() {
             self.consistency.last_baro = Some((t, s.baro));
+            self.consistency.baro_flat.push(t, s.baro);
             self.stats.baro_rows += 1;
             self.baro_row(t, s.baro);
         }
@@ -2137,6 +2155,8 @@ impl Detector {
         self.last_est.baro_h = None;
         self.episode.coast_start = None;
         self.episode.withheld.release();
+        // A reading logged before the gap and one after it are not a run.
+        self.consistency.baro_flat.restart();
     }
 
     /// Predict the filter by `dt` boot-clock s to `t`, on the held IMU if
@@ -2223,6 +2243,8 @@ impl Detector {
         let prev = self.ind.previous(6);
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
         let cons = self.ind.observe_baro(t, baro - self.consistency.alt_int, self.episode.withheld.baro());
+        // A held reading follows a hover's filter: not a recovery.
+        let cons = if self.consistency.baro_flat.stuck() { f64::INFINITY } else { cons };
         if self.episode.withheld.baro_released(cons) {
             // The withheld baro follows the filter's climb again (its change
             // since before the fault is consistent): the fault is over, but
@@ -3129,7 +3151,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_flat, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

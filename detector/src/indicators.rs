@@ -1187,6 +1187,17 @@ impl IndicatorEngine {
     pub fn r_unfolded(&self) -> f64 {
         self.r_unfolded
     }
+
+    /// A test folded into the closed epoch's R after `close_epoch` (the
+    /// detector's ramp, drift, altitude-vote and flatline tests): it is one
+    /// of the other tests, so it counts in `r_unfolded` too. Without it an
+    /// episode those tests opened was taken for an IMU episode, which ends
+    /// when the IMU is calm, whatever the baro or the GPS still does.
+    pub fn fold_unfolded(&mut self, x: f64) {
+        if x.is_finite() && x > self.r_unfolded {
+            self.r_unfolded = x;
+        }
+    }
 }
 
 #[cfg(all(test, not(target_arch = "wasm32")))]

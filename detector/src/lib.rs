@@ -15,6 +15,7 @@ pub mod codec;
 pub mod config;
 pub mod detector;
 pub mod dragend;
+pub mod flatline;
 pub mod drift;
 pub mod error;
 pub mod filter;

@@ -61,8 +61,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// track (`ramp::RampTest`). 12: the two share one window (`window::Window`).
 /// 13: their statistics are no longer kept between epochs. 14: the
 /// horizontal drag-off's end confirmation (`dragend::DragEnd`), the
-/// vehicle-upset gate (`kind::UPSET`) and the IMU's sample interval.
-pub const VERSION: u32 = 14;
+/// vehicle-upset gate (`kind::UPSET`) and the IMU's sample interval. 15:
+/// the baro's flatline test (`flatline::Flatline`).
+pub const VERSION: u32 = 15;
 
 #[derive(Clone)]
 struct Header {

@@ -447,8 +447,8 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
       return h.info && text.startsWith(`${(h.info.bytes / 1024).toFixed(1)} KiB · format v${h.info.version} · `);
     }, null, { timeout: 5000 });
     const snapText = await page.textContent('#live-snap');
-    assert.match(snapText, /^\d+\.\d KiB · format v14 · navguard \d+\.\d+\.\d+/);
-    assert.ok(before.info.bytes > 10000 && before.info.version === 14, JSON.stringify(before.info));
+    assert.match(snapText, /^\d+\.\d KiB · format v15 · navguard \d+\.\d+\.\d+/);
+    assert.ok(before.info.bytes > 10000 && before.info.version === 15, JSON.stringify(before.info));
     await page.waitForFunction(() => /^\d\d:\d\d:\d\d · [\d,]+ rows · [2-9]\d* saves$/.test(document.querySelector('#live-saved').textContent), null, { timeout: 5000 });
     await page.screenshot({ path: join(artifacts, 'page-live.png'), fullPage: true });
 
@@ -468,7 +468,7 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
     const offer = await page.textContent('#live-resume');
     const hhmmss = new Date(saved.savedAt).toLocaleTimeString('en-GB', { hour12: false });
     assert.equal(offer, `Resume live session (saved ${hhmmss}, ${saved.rowCount.toLocaleString('en-US')} rows, ${saved.stats.retrains} ${saved.stats.retrains === 1 ? 'retrain' : 'retrains'})`);
-    assert.match(await page.textContent('#live-offer-detail'), new RegExp(`next row ${saved.nextRow.toLocaleString('en-US')} of 12,500 · snapshot [\\d.]+ KiB, format v14`));
+    assert.match(await page.textContent('#live-offer-detail'), new RegExp(`next row ${saved.nextRow.toLocaleString('en-US')} of 12,500 · snapshot [\\d.]+ KiB, format v15`));
     assert.equal(await page.$eval('#live-panel', (e) => e.hidden), true);
 
     await page.click('#live-resume');
