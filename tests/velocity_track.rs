@@ -126,6 +126,8 @@ fn a_baro_step_met_in_a_gps_episode_is_judged_against_the_level_before_it() {
     let r = battery::run(&f, &Config::default()).unwrap();
     let share = r.events[0].share;
     assert!(share >= 0.9, "{:.0}% of the step flagged", 100.0 * share);
+    // 10 before the baro tests' motion allowance, 11 with it (the step's
+    // end, at 170 s, meets a manoeuvre); 60 before the levels went on.
     let n = flagged_after(&f, 60.0);
-    assert!(n <= 10, "{n} epochs flagged in the 60 s after the step (1 Hz; was 60)");
+    assert!(n <= 12, "{n} epochs flagged in the 60 s after the step (1 Hz; was 60)");
 }

@@ -1295,7 +1295,7 @@ impl Consistency {
         let drift = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld), fix.epv);
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
-            ind.observe_baro_gps(t, b + y[2]);
+            ind.observe_baro_gps(t, b + y[2], fix.vel.as_ref().map_or([f64::NAN; 2], motion_of));
         }
         // IMU consistency: GPS horizontal velocity against the filter's
         // IMU-predicted velocity changes, only while every prediction since
@@ -1574,6 +1574,12 @@ impl Withheld {
         }
         Ok(())
     }
+}
+
+/// The motion a baro's healthy error follows, from a velocity (NED m/s):
+/// horizontal speed² (m/s)² and climb rate (m/s, up).
+fn motion_of(v: &Vector3<f64>) -> [f64; 2] {
+    [v[0] * v[0] + v[1] * v[1], -v[2]]
 }
 
 /// The baro's filter update; the indicator engine learns the posterior
@@ -2242,7 +2248,7 @@ impl Detector {
         let m = self.last_est.baro_h.map_or(0.0, |p| kf.baro_height() - p);
         let prev = self.ind.previous(6);
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
-        let cons = self.ind.observe_baro(t, baro - self.consistency.alt_int, self.episode.withheld.baro());
+        let cons = self.ind.observe_baro(t, baro - self.consistency.alt_int, self.episode.withheld.baro(), motion_of(&kf.velocity()));
         // A held reading follows a hover's filter: not a recovery.
         let cons = if self.consistency.baro_flat.stuck() { f64::INFINITY } else { cons };
         if self.episode.withheld.baro_released(cons) {

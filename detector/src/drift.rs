@@ -67,8 +67,9 @@ const FLOOR_M: [f64; 2] = [1.5, 1.0];
 /// Motion allowance: m per (m/s)² of horizontal speed squared (a static
 /// port's dynamic-pressure error, up to ~0.02), m per m/s of climb rate
 /// (prop-wash), m near the ground within a band of m.
-const K_DYN: f64 = 0.02;
-const K_CLIMB: f64 = 1.0;
+pub const K_DYN: f64 = 0.02;
+/// m per m/s of climb rate (see `K_DYN`).
+pub const K_CLIMB: f64 = 1.0;
 const GROUND_M: f64 = 2.0;
 const GROUND_BAND_M: f64 = 5.0;
 /// Statistic at which a drift is called (see `DRIFT_R_SCALE` in

@@ -586,6 +586,14 @@ impl PvTest {
 #[serde(bound(serialize = "[f64; D]: Serialize", deserialize = "[f64; D]: Deserialize<'de>"))]
 pub struct LagTest<const D: usize> {
     ring: Vec<(f64, [f64; D])>,
+    /// The motion at each ring entry (horizontal speed² (m/s)², climb
+    /// m/s; NaN when unknown), for the allowance.
+    motion: Vec<[f64; 2]>,
+    /// Allowance per unit change of the motion between the window's ends:
+    /// m per (m/s)² and m per m/s (zero: none). A sensor whose healthy
+    /// error moves with the motion (a baro: dynamic pressure, prop-wash) is
+    /// judged on the change net of it.
+    allow: [f64; 2],
     head: usize,
     len: usize,
     /// Window length, s.
@@ -621,6 +629,8 @@ impl<const D: usize> LagTest<D> {
     pub fn new(cap: usize, span: f64, sigma0: f64, floor: f64, alpha: f64, tau: f64, fast_start: bool) -> Self {
         LagTest {
             ring: vec![(0.0, [0.0; D]); cap.max(2)],
+            motion: vec![[f64::NAN; 2]; cap.max(2)],
+            allow: [0.0; 2],
             head: 0,
             len: 0,
             span,
@@ -637,6 +647,18 @@ impl<const D: usize> LagTest<D> {
             learnt: 0,
             fast_start,
         }
+    }
+
+    /// The same test with a motion allowance (see `allow`).
+    pub fn with_allowance(mut self, allow: [f64; 2]) -> Self {
+        self.allow = allow;
+        self
+    }
+
+    /// The allowance between the entries at ring indices `i` and `j`, m.
+    fn allowance(&self, i: usize, j: usize) -> f64 {
+        let (a, b) = (self.motion[i], self.motion[j]);
+        (0..2).map(|k| if (a[k] - b[k]).is_finite() { self.allow[k] * (a[k] - b[k]).abs() } else { 0.0 }).sum()
     }
 
     /// The statistic over the most recent `dt` s only (newest entry against
@@ -682,8 +704,12 @@ impl<const D: usize> LagTest<D> {
     }
 
     fn oldest(&self) -> (f64, [f64; D]) {
+        self.ring[self.oldest_index()]
+    }
+
+    fn oldest_index(&self) -> usize {
         let cap = self.ring.len();
-        self.ring[(self.head + cap - self.len) % cap]
+        (self.head + cap - self.len) % cap
     }
 
     /// Hold the window's start (the sensor is withheld) or release it. A
@@ -700,6 +726,12 @@ impl<const D: usize> LagTest<D> {
     /// hold makes the window longer than `T`; NaN until the window spans
     /// `T/2`. Non-finite input restarts the window.
     pub fn push(&mut self, t: f64, z: [f64; D]) -> f64 {
+        self.push_moving(t, z, [f64::NAN; 2])
+    }
+
+    /// `push` with the motion at `t` (horizontal speed² (m/s)², climb m/s)
+    /// for the allowance: each axis' change is shrunk towards zero by it.
+    pub fn push_moving(&mut self, t: f64, z: [f64; D], motion: [f64; 2]) -> f64 {
         self.last_s = [f64::NAN; D];
         if !(t.is_finite() && z.iter().all(|v| v.is_finite())) {
             let hold = self.hold;
@@ -715,6 +747,8 @@ impl<const D: usize> LagTest<D> {
             self.len -= 1;
         }
         self.ring[self.head] = (t, z);
+        self.motion[self.head] = motion;
+        let newest = self.head;
         self.head = (self.head + 1) % cap;
         self.len += 1;
         if !self.hold {
@@ -736,9 +770,11 @@ impl<const D: usize> LagTest<D> {
         }
         self.last_t = t;
         let scale = (dt / self.span).max(1.0).sqrt();
+        let allowed = self.allowance(newest, self.oldest_index());
         let mut z2 = 0.0;
         for a in 0..D {
             let s = z[a] - z0[a] - self.rate[a] * dt;
+            let s = s.signum() * (s.abs() - allowed).max(0.0);
             self.last_s[a] = s;
             let z = s / (self.sigma(a) * scale);
             z2 += z * z;
@@ -780,6 +816,10 @@ const BARO_SIGMA0: f64 = 1.0;
 const BARO_FLOOR: f64 = 0.8;
 const BARO_ALPHA: f64 = 0.005;
 const BARO_TAU: f64 = 20.0;
+/// A healthy baro's error moves with the motion: the allowance per change
+/// of horizontal speed² and of climb rate over the window, the drift
+/// test's physical bounds (`drift::K_DYN`, `drift::K_CLIMB`).
+const BARO_ALLOWANCE: [f64; 2] = [crate::drift::K_DYN, crate::drift::K_CLIMB];
 /// The baro–GPS altitude test: the GPS altitude is noisier than the baro,
 /// so a larger start and floor (m); σ learnt from the first windows on.
 const BARO_GPS_SIGMA0: f64 = 2.0;
@@ -836,8 +876,8 @@ impl IndicatorEngine {
                 r_imu: f64::NAN,
             },
             pv: PvTest::new(PV_WINDOW_FACTOR * w),
-            baro: LagTest::new(BARO_CAP, BARO_SPAN, BARO_SIGMA0, BARO_FLOOR, BARO_ALPHA, BARO_TAU, false),
-            baro_gps: LagTest::new(BARO_CAP, BARO_SPAN, BARO_GPS_SIGMA0, BARO_GPS_FLOOR, BARO_ALPHA, BARO_TAU, true),
+            baro: LagTest::new(BARO_CAP, BARO_SPAN, BARO_SIGMA0, BARO_FLOOR, BARO_ALPHA, BARO_TAU, false).with_allowance(BARO_ALLOWANCE),
+            baro_gps: LagTest::new(BARO_CAP, BARO_SPAN, BARO_GPS_SIGMA0, BARO_GPS_FLOOR, BARO_ALPHA, BARO_TAU, true).with_allowance(BARO_ALLOWANCE),
             baro_gps_pending: f64::NAN,
             imu: LagTest::new(IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true),
             baro_pending: f64::NAN,
@@ -876,6 +916,11 @@ impl IndicatorEngine {
         ring("baro", self.baro.ring.len(), fresh.baro.ring.len(), self.baro.head, self.baro.len)?;
         ring("baro_gps", self.baro_gps.ring.len(), fresh.baro_gps.ring.len(), self.baro_gps.head, self.baro_gps.len)?;
         ring("imu", self.imu.ring.len(), fresh.imu.ring.len(), self.imu.head, self.imu.len)?;
+        for (name, m, r) in [("baro", self.baro.motion.len(), self.baro.ring.len()), ("baro_gps", self.baro_gps.motion.len(), self.baro_gps.ring.len()), ("imu", self.imu.motion.len(), self.imu.ring.len())] {
+            if m != r {
+                return Err(format!("indicator window {name}: {m} motion entries for a ring of {r}"));
+            }
+        }
         Ok(())
     }
 
@@ -993,9 +1038,9 @@ impl IndicatorEngine {
     /// velocity integrated, m) at time `t`; `held`: the baro is withheld
     /// from the filter (the window's start is held).
     /// Returns this sample's statistic (NaN while the window is short).
-    pub fn observe_baro(&mut self, t: f64, z: f64, held: bool) -> f64 {
+    pub fn observe_baro(&mut self, t: f64, z: f64, held: bool, motion: [f64; 2]) -> f64 {
         self.baro.set_hold(held);
-        let st = self.baro.push(t, [z]);
+        let st = self.baro.push_moving(t, [z], motion);
         if st.is_finite() {
             self.baro_pending = if self.baro_pending.is_finite() { self.baro_pending.max(st) } else { st };
         }
@@ -1017,8 +1062,8 @@ impl IndicatorEngine {
 
     /// Feed one GPS epoch's baro minus GPS altitude (m, the latest baro
     /// sample) at time `t` s.
-    pub fn observe_baro_gps(&mut self, t: f64, z: f64) {
-        self.baro_gps_pending = self.baro_gps.push(t, [z]);
+    pub fn observe_baro_gps(&mut self, t: f64, z: f64, motion: [f64; 2]) {
+        self.baro_gps_pending = self.baro_gps.push_moving(t, [z], motion);
     }
 
     /// The epoch was normal: the baro–GPS test learns its σ from it.
@@ -1445,6 +1490,30 @@ mod tests {
         // Longer than the ring holds: NaN.
         assert!(l.recent(10.0).is_nan());
     }
+
+    #[test]
+    fn lag_test_allowance_shrinks_the_change_by_the_motion_change() {
+        // σ = 1 (α = 0), T = 2 s; 0.02 m per (m/s)², 1 m per m/s of climb.
+        let mut l = LagTest::<1>::new(8, 2.0, 1.0, 0.5, 0.0, 0.0, false).with_allowance([0.02, 1.0]);
+        l.push_moving(0.0, [0.0], [100.0, 0.0]);
+        l.push_moving(1.0, [0.0], [100.0, 0.0]);
+        // Speed 10 → 20 m/s (Δv² = 300: 6 m) and climb 0 → 2 m/s (2 m):
+        // 8 m allowed, so a change of −9.5 m counts as −1.5 m.
+        assert_abs_diff_eq!(l.push_moving(2.0, [-9.5], [400.0, 2.0]), 1.5, epsilon = 1e-12);
+        assert_abs_diff_eq!(l.last_s[0], -1.5, epsilon = 1e-12);
+        // Within the allowance: nothing.
+        l.clear();
+        l.push_moving(0.0, [0.0], [100.0, 0.0]);
+        assert_abs_diff_eq!(l.push_moving(2.0, [7.9], [400.0, 2.0]), 0.0, epsilon = 1e-12);
+        // Unknown motion at an end allows nothing for that term, and a test
+        // without an allowance is the plain one.
+        l.clear();
+        l.push_moving(0.0, [0.0], [f64::NAN, 0.0]);
+        assert_abs_diff_eq!(l.push_moving(2.0, [3.0], [400.0, 2.0]), 1.0, epsilon = 1e-12);
+        let mut plain = LagTest::<1>::new(8, 2.0, 1.0, 0.5, 0.0, 0.0, false);
+        plain.push_moving(0.0, [0.0], [100.0, 0.0]);
+        assert_abs_diff_eq!(plain.push_moving(2.0, [3.0], [400.0, 2.0]), 3.0, epsilon = 1e-12);
+    }
 }
 
 /// The snapshot codec of this file's state types ([`crate::codec`]): each
@@ -1460,5 +1529,5 @@ mod codec_impls {
     impl_codec!(IndicatorSettings { window, floor, initial, alpha });
     impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded });
     impl_codec!(PvTest { ring, head, len, sum, since_resum, ms, ms_u, last_u, inc, inc_len, inc_head, inc_cap, stat, learnt_u, learnt_s });
-    impl_codec!(LagTest<const D: usize> { ring, head, len, span, ms, floor, alpha, hold, rate, tau, t_rate, last_s, last_dt, last_t, learnt, fast_start });
+    impl_codec!(LagTest<const D: usize> { ring, motion, allow, head, len, span, ms, floor, alpha, hold, rate, tau, t_rate, last_s, last_dt, last_t, learnt, fast_start });
 }
