@@ -1,7 +1,7 @@
 //! Trace one battery flight: `bprobe tune|eval INDEX [IMU_HZ]` prints each
 //! GPS epoch (optionally with the flight's IMU at another rate);
 //! `bprobe check C I` traces instance `I` of the specific check `C`
-//! (`battery::CHECKS`).
+//! (`battery::CHECKS`). With `BPROBE_BARO=1` the baro rows too.
 use navguard::{battery, config::Config, detector::Detector};
 
 fn main() {
@@ -17,9 +17,14 @@ fn main() {
     }
     println!("# {}\n# {:?}", f.describe(), f.baro);
     let rows = battery::simulate(&f);
+    // BPROBE_BARO=1: also print every baro row (t, value).
+    let baro = std::env::var("BPROBE_BARO").is_ok();
     let mut det = Detector::new(Config::default()).unwrap();
     for s in &rows {
         let o = det.push(s).unwrap();
+        if baro && s.baro.is_finite() {
+            println!("{:8.2} baro {:.4}", s.t, s.baro);
+        }
         if o.gps_epoch {
             let i = det.indicators();
             println!("{:8.2} lab {} st {} k {} drv {} f {:5.2} r {:6.2} rg {:6.2} {:6.2} {:6.2}", s.t, s.label, o.status, o.kind, o.driver, o.f, o.r, i.r_group[0], i.r_group[1], i.r_group[2]);

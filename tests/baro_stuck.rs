@@ -5,6 +5,9 @@
 //! stuck epochs flagged, median first flag 8.6 s; never in a hover).
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
+use common::flagged_after;
 use navguard::battery::{self, Flight, Split};
 use navguard::Config;
 
@@ -70,4 +73,17 @@ fn a_baro_episode_does_not_end_on_the_imu_and_the_imu_rate_does_not_matter() {
         "{:.0}% flagged, first flag after {delay:.1} s",
         100.0 * share
     );
+}
+
+/// Regression: tune #224 (aggressive, 10 Hz GPS): the baro held for 108 s
+/// comes back 27 m away, and that jump stayed in the baro's 6 s windows:
+/// 59 epochs flagged in the 6 s after the fault. A stuck baro that reads
+/// again restarts its windows and its offset (`Detector::baro_revived`).
+#[test]
+fn a_stuck_baro_that_reads_again_is_not_flagged_for_its_return() {
+    let f = Flight::draw(Split::Tune, 224);
+    assert_eq!(f.faults[0].kind.name(), "baro-stuck");
+    let (n, of) = flagged_after(&f, 20.0);
+    // 4 now (the revival epoch and its verdict settling), was 59.
+    assert!(of > 150 && n <= 5, "{n} of {of} epochs flagged in the 20 s after the stuck baro");
 }

@@ -1530,6 +1530,12 @@ impl Withheld {
         }
     }
 
+    /// Feed the baro again (it was withheld for a fault that is over).
+    fn release_baro(&mut self) {
+        self.groups[2] = false;
+        self.baro_calm = 0;
+    }
+
     /// A baro sample with consistency `cons` (see `indicators`): a withheld
     /// baro that follows the filter's climb again for a few samples is
     /// released. Returns whether it was released on this sample.
@@ -2094,8 +2100,11 @@ impl Detector {
         self.hold_imu(t, s);
         if s.has_baro() {
             self.consistency.last_baro = Some((t, s.baro));
-            self.consistency.baro_flat.push(t, s.baro);
+            let revived = self.consistency.baro_flat.push(t, s.baro);
             self.stats.baro_rows += 1;
+            if revived {
+                self.baro_revived();
+            }
             self.baro_row(t, s.baro);
         }
         let mut out = if s.has_fix() && self.clock.fresh(s) {
@@ -2271,6 +2280,21 @@ impl Detector {
             }
         }
         self.last_est.baro_h = Some(kf.baro_height());
+    }
+
+    /// A baro called stuck reads again: what its windows and its offset
+    /// hold is the fault's, so they restart, and the baro is fed again (its
+    /// return jump, 27 m on battery tune #224, otherwise stayed in the
+    /// 6 s windows and was flagged for 6 s after the fault).
+    fn baro_revived(&mut self) {
+        self.ind.reset_axis(6);
+        self.ind.clear_baro();
+        self.ind.clear_baro_gps();
+        self.episode.withheld.release_baro();
+        if let Some(kf) = self.kf.as_mut() {
+            kf.reset_baro();
+        }
+        self.last_est.baro_h = None;
     }
 
     /// The first fix, or the first after a data gap or a filter error,

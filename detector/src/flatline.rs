@@ -67,15 +67,18 @@ impl Default for Flatline {
 
 impl Flatline {
     /// A reading `x` at `t`. Non-finite readings restart the run unlearnt.
-    pub fn push(&mut self, t: f64, x: f64) {
+    /// Returns whether this reading ended a run that was called stuck: the
+    /// sensor is live again.
+    pub fn push(&mut self, t: f64, x: f64) -> bool {
         if x.is_finite() && x.to_bits() == self.last.to_bits() {
             self.run = self.run.saturating_add(1);
             self.t1 = t;
             if self.z() >= Z {
                 self.called = true;
             }
-            return;
+            return false;
         }
+        let revived = self.called;
         if self.last.is_finite() && x.is_finite() && !self.called {
             // The run ended with a change: `run` repeats, then one change.
             self.k += f64::from(self.run);
@@ -91,6 +94,7 @@ impl Flatline {
         self.t1 = t;
         self.run = 0;
         self.called = false;
+        revived
     }
 
     /// The learnt share of samples that repeat the previous one.
@@ -198,14 +202,15 @@ mod tests {
             f.push(60.0 + 0.1 * f64::from(i), 5.0);
         }
         assert!(f.stuck());
-        f.push(70.0, 6.0);
+        assert!(f.push(70.0, 6.0), "the end of a called run is a revival");
         assert_eq!(f.share(), share, "the stuck run was learnt");
         assert!(!f.stuck());
         f.restart();
         assert_eq!(f.share(), share);
         assert_eq!(f.z(), 0.0);
-        f.push(71.0, 6.0);
-        assert_eq!(f.z(), 0.0, "a restart forgets the reading");
+        assert!(!f.push(71.0, 6.0), "a restart forgets the reading");
+        assert_eq!(f.z(), 0.0);
+        assert!(!f.push(71.1, 6.1), "a live change after an uncalled run");
     }
 
     #[test]

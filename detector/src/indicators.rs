@@ -1116,6 +1116,11 @@ impl IndicatorEngine {
         self.baro.clear();
     }
 
+    /// Restart the baro–GPS window (its entries span a baro fault).
+    pub fn clear_baro_gps(&mut self) {
+        self.baro_gps.clear();
+    }
+
     /// The axis' reference residual: the post-update residual of the last
     /// accepted epoch (NaN before the first).
     pub fn reference(&self, axis: usize) -> f64 {
