@@ -1191,6 +1191,13 @@ impl Consistency {
         (if bn * zn > 0.0 { bn.abs().min(zn.abs()) } else { 0.0 }, false)
     }
 
+    /// The baro came back onto both its levels at this epoch (see
+    /// `VelocityTrack::returned`): a baro fault ended. A GPS altitude fault
+    /// moves only the level against the GPS altitude.
+    fn baro_returned(&self) -> bool {
+        self.baro_gps_level.returned() && self.baro_dop_level.returned()
+    }
+
     /// A position episode's jump confirmed, over the seconds after it, as
     /// a drag-off's end (see `dragend`): the track's level moved with the
     /// truth's return, so its baseline moves to the fix.
@@ -1580,6 +1587,21 @@ impl Withheld {
         }
         Ok(())
     }
+}
+
+/// A baro fault is over (a stuck baro reads again, or the baro came back
+/// onto its levels): what the baro's windows, its Δr reference and the
+/// filter's baro offset hold is the fault's, so they restart, and the baro
+/// is fed again.
+fn restart_baro(kf: Option<&mut Kf>, ind: &mut IndicatorEngine, withheld: &mut Withheld, last_est: &mut LastEstimate) {
+    ind.reset_axis(6);
+    ind.clear_baro();
+    ind.clear_baro_gps();
+    withheld.release_baro();
+    if let Some(kf) = kf {
+        kf.reset_baro();
+    }
+    last_est.baro_h = None;
 }
 
 /// The motion a baro's healthy error follows, from a velocity (NED m/s):
@@ -2287,14 +2309,7 @@ impl Detector {
     /// return jump, 27 m on battery tune #224, otherwise stayed in the
     /// 6 s windows and was flagged for 6 s after the fault).
     fn baro_revived(&mut self) {
-        self.ind.reset_axis(6);
-        self.ind.clear_baro();
-        self.ind.clear_baro_gps();
-        self.episode.withheld.release_baro();
-        if let Some(kf) = self.kf.as_mut() {
-            kf.reset_baro();
-        }
-        self.last_est.baro_h = None;
+        restart_baro(self.kf.as_mut(), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
     }
 
     /// The first fix, or the first after a data gap or a filter error,
@@ -2361,11 +2376,20 @@ impl Detector {
         // altitude back onto both the baro and its own vertical velocity
         // integrated after they both condemned it (`altitude_vote`).
         let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back;
+        // The baro back on both its levels, from beyond `FAR` σ to within
+        // `NEAR` (see `track`): the end of a baro fault. The jump back is
+        // in the baro's 6 s windows and its Δr, which a baro released
+        // during the fault had re-based on the faulty level (battery tune
+        // #175: a 7.9 m step for 66 s, its end flagged for 5.6 s).
+        let baro_back = !self.oracle && self.episode.active && self.consistency.baro_returned();
+        if baro_back {
+            restart_baro(Some(&mut *kf), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
+        }
         let drag_end = self.consistency.drag_ended(fix.t, self.episode.active);
         // An upset vehicle (see `kind::UPSET`): nothing is judged, and the
         // filter re-anchors at every epoch until it is over.
         let upset = fix.t <= self.upset_until;
-        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end || upset);
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end || upset || baro_back);
         let was_active = self.episode.active;
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from

@@ -1,0 +1,24 @@
+//! The end of a baro fault: the baro back onto both its levels (against the
+//! GPS altitude and the GPS vertical velocity integrated, `track`'s
+//! `returned`). Its jump back is in the baro's 6 s windows and its Δr,
+//! which a baro released during the fault had re-based on the faulty
+//! level; the detector now restarts them instead of flagging the return.
+#![cfg(not(target_arch = "wasm32"))]
+
+mod common;
+
+use common::flagged_after;
+use navguard::battery::{self, Flight, Split};
+use navguard::Config;
+
+/// Regression: tune #175 (hover, 1 Hz GPS): a 7.9 m baro step for 66 s,
+/// flagged throughout; its end was flagged for the next 6 epochs (5.6 s).
+#[test]
+fn a_baro_step_that_ends_is_not_flagged_for_its_return() {
+    let f = Flight::draw(Split::Tune, 175);
+    assert_eq!(f.faults[0].kind.name(), "baro-step");
+    let r = battery::run(&f, &Config::default()).unwrap();
+    assert!(r.events[0].share >= 0.95, "{:.0}% of the step flagged", 100.0 * r.events[0].share);
+    let (n, of) = flagged_after(&f, 20.0);
+    assert!(of >= 18 && n == 0, "{n} of {of} epochs flagged in the 20 s after the step");
+}
