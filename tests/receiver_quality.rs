@@ -140,3 +140,26 @@ fn a_declaration_ends_with_the_first_usual_fix_after_a_data_gap() {
     assert_ne!(first_after.1.kind, kind::DEGRADED, "declared at {} after the gap", first_after.0.t);
     assert!(cut.iter().zip(&out).any(|(s, o)| s.t < t0 + 5.0 && o.kind == kind::DEGRADED));
 }
+
+/// Regression: tune #150 (aggressive, 2 Hz GPS, Gauss–Markov σ 1.07 m): a
+/// degraded stretch (10 m offset plus a walk) that the filter followed at
+/// its reduced weight; the first usual fix after it jumped back to the
+/// truth and was flagged as a step until the 60 s coast limit (121
+/// epochs). A jump within `DECLARED_RETURN_S` of a declared-degraded fix
+/// is the receiver's return: the filter re-anchors on it.
+#[test]
+fn the_jump_back_after_a_degraded_stretch_is_its_end_not_a_step() {
+    let f = Flight::draw(Split::Tune, 150);
+    assert_eq!(f.faults[0].kind.name(), "degraded");
+    let ft = f.faults[0];
+    let rows = battery::simulate(&f);
+    let mut det = Detector::new(Config::default()).unwrap();
+    let after: Vec<u8> = rows
+        .iter()
+        .map(|s| (s.t, s.label, det.push(s).unwrap()))
+        .filter(|(t, lab, o)| o.gps_epoch && !lab.is_nan() && *t >= ft.end_log && *t < ft.end_log + 60.0)
+        .map(|(_, _, o)| o.status)
+        .collect();
+    let n = after.iter().filter(|st| **st != 0).count();
+    assert!(after.len() > 100 && n <= 3, "{n} of {} epochs flagged in the 60 s after the stretch", after.len());
+}

@@ -461,8 +461,14 @@ struct ReceiverQuality {
     /// the receiver is still acquiring (the PX4 logs' 2D fixes for 1.7 s
     /// before the first 3D one), which is no fault of a fix it had.
     acquired: bool,
+    /// Time of the last fix the receiver declared degraded, s.
+    last_declared: Option<f64>,
 }
 
+/// How long after its last declared-degraded fix a receiver's jump is its
+/// return, s: a few fixes at 1 Hz, and longer than the claim takes to
+/// improve before the position does.
+const DECLARED_RETURN_S: f64 = 3.0;
 /// Forgetting factor of the usual eph, per learnt fix.
 const QUALITY_ALPHA: f64 = 0.02;
 /// A claim this many times the usual one or more is not learnt as usual.
@@ -515,7 +521,20 @@ impl ReceiverQuality {
         let says = fix.self_declared_degraded();
         self.acquired |= !says;
         self.declared = self.acquired && (says || (learnt && self.scale(fix.eph) >= QUALITY_DECLARED));
+        if self.declared {
+            self.last_declared = Some(fix.t);
+        }
         self.declared
+    }
+
+    /// A fix at `t` the receiver calls usual, within `DECLARED_RETURN_S`
+    /// of one it declared degraded: a jump here is the receiver coming
+    /// back from the degraded stretch, which the filter had followed at
+    /// its reduced weight (battery tune #150: the first usual fix jumped
+    /// 10 m back to the truth and was flagged as a step for the 60 s
+    /// coast limit).
+    fn returning(&self, t: f64) -> bool {
+        !self.declared && self.last_declared.is_some_and(|d| t - d <= DECLARED_RETURN_S)
     }
 
     /// Learn a claim from a fix with a normal verdict. Claims of a degraded
@@ -2363,12 +2382,12 @@ impl Detector {
         let fault_ended = verdict.fault
             && !self.oracle
             && !self.episode.active
-            && self.consistency.unflagged_fault_ended(
+            && (self.quality.returning(fix.t) || self.consistency.unflagged_fault_ended(
                 &mut self.episode,
                 &res,
                 self.quality.scale(fix.eph) < QUALITY_DEGRADED,
                 core::array::from_fn(|a| self.ind.sigma(3 + a)),
-            );
+            ));
         // The GPS back where it was before a fault the filter had followed:
         // its altitude on the baro's level after a drift the two GPS
         // references shared (a vertical drag-off, see `drift`), or its
@@ -3201,7 +3220,7 @@ mod codec_impls {
     impl_codec!(Stats { rows, gps_epochs, imu_rows, baro_rows, retrains, filter_resets, data_gaps, filter_errors });
     impl_codec!(Ring { buf, head, len });
     impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until });
-    impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run, declared, acquired });
+    impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run, declared, acquired, last_declared });
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });
