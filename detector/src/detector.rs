@@ -267,7 +267,7 @@ const IMU_TIMEOUT: f64 = 0.25; // s: older IMU is not used for prediction
 /// this many in-flight windows learnt: its σ must be the flight's, not the
 /// ground's (on the real Loiter log, take-off alone reaches 3–6).
 const IMU_ARM_S: f64 = 20.0;
-const IMU_ARM_WINDOWS: u32 = 50;
+use crate::indicators::IMU_ARM_WINDOWS;
 /// The IMU consistency judges only an IMU logged at least this often, s
 /// between samples (25 Hz): sparser records are snapshots of a fast sensor
 /// that integrate a turn's changing acceleration poorly (the shared
@@ -1331,11 +1331,12 @@ impl Consistency {
             ind.clear_imu();
             self.imu_gap = false;
         }
-        let z = fix.vel.filter(|_| !declared).map(|v| [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1]]);
-        match z {
+        let z3 = fix.vel.filter(|_| !declared).map(|v| [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1], v[2] - self.dv_imu[2]]);
+        match z3 {
             Some(z) => ind.observe_imu(t, z),
             None => ind.clear_imu(),
         }
+        let z = z3.map(|z| [z[0], z[1]]);
         // The same `z` measures a drag-off's end (see `dragend`); an IMU gap
         // left changes out of `dv_imu`, so it restarts there.
         self.drag_end.push(t, z.filter(|_| !imu_gap && !vel_withheld));
@@ -2408,6 +2409,12 @@ impl Detector {
         // An upset vehicle (see `kind::UPSET`): nothing is judged, and the
         // filter re-anchors at every epoch until it is over.
         let upset = fix.t <= self.upset_until;
+        if upset {
+            // The upset's attitude made the IMU's predicted velocity
+            // changes meaningless: its windows restart after it (the
+            // vertical one spans 6 s, longer than the 5 s hold).
+            self.ind.clear_imu();
+        }
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end || upset || baro_back);
         let was_active = self.episode.active;
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);

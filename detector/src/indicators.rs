@@ -388,6 +388,8 @@ pub struct IndicatorEngine {
     pv: PvTest,
     baro: LagTest<1>,
     imu: LagTest<2>,
+    /// The same on the vertical axis.
+    imu_v: LagTest<1>,
     /// Baro against the GPS altitude (`z = baro − alt` per GPS epoch): the
     /// baro group's R is capped by it, so the baro is condemned only when it
     /// departs from the GPS altitude as well as from the filter and the
@@ -685,6 +687,13 @@ impl<const D: usize> LagTest<D> {
         f64::NAN
     }
 
+    /// The statistic of the last `push` (NaN when it had none).
+    pub fn last_stat(&self) -> f64 {
+        let scale = (self.last_dt / self.span).max(1.0).sqrt();
+        let z2: f64 = (0..D).map(|a| (self.last_s[a] / (self.sigma(a) * scale)).powi(2)).sum();
+        (z2 / D as f64).sqrt()
+    }
+
     /// Windows learnt from so far.
     pub fn learnt(&self) -> u32 {
         self.learnt
@@ -809,6 +818,22 @@ impl<const D: usize> LagTest<D> {
     }
 }
 
+/// A one-axis statistic `|z|` (a normal z-score) read on the scale of the
+/// two-axis RMS statistic `sqrt((z₁² + z₂²)/2)`: the value `x` with the same
+/// tail probability, `exp(−x²) = erfc(|z|/√2)`. A 1-axis |z| of 4.43 is
+/// then 3.4, the IMU test's call, where the same threshold on |z| would
+/// call 70 times as often. NaN stays NaN.
+fn one_axis_as_two(z: f64) -> f64 {
+    let y = z.abs() * core::f64::consts::FRAC_1_SQRT_2;
+    let tail = libm::erfc(y);
+    if tail > 1e-300 {
+        libm::sqrt(-libm::log(tail))
+    } else {
+        // erfc(y) ≈ exp(−y²) / (y √π) beyond its range.
+        libm::sqrt(y * y + libm::log(y * libm::sqrt(core::f64::consts::PI)))
+    }
+}
+
 /// Baro consistency: window, s; ring capacity (baro samples); σ start/floor, m; α.
 pub const BARO_SPAN: f64 = 6.0;
 const BARO_CAP: usize = 512;
@@ -836,6 +861,19 @@ const IMU_SIGMA0: f64 = 0.5;
 const IMU_FLOOR: f64 = 0.06;
 const IMU_ALPHA: f64 = 0.005;
 const IMU_TAU: f64 = 20.0;
+/// The IMU consistency joins the decision once this many in-flight windows
+/// are learnt (and after `IMU_ARM_S` of flight, see `detector`): its σ
+/// must be the flight's, not the ground's.
+pub const IMU_ARM_WINDOWS: u32 = 50;
+/// The vertical IMU test's window, s, and ring (GPS epochs, 20 Hz): twice
+/// the horizontal one's. A bias grows `z` with the span; a take-off, a
+/// throttle cut or a touch-down moves it by a bounded amount (the
+/// receiver's velocity lags the IMU's by a fraction of a second), which a
+/// longer window's σ outgrows. With 3 s the real log 09-10 was flagged
+/// twice on the IMU: a throttle cut before a hard landing (110 s, 5.8 m/s²
+/// of fall for 0.4 s) and a take-off (164.6 s); with 6 s neither.
+const IMU_V_SPAN: f64 = 2.0 * IMU_SPAN;
+const IMU_V_CAP: usize = 2 * IMU_CAP;
 
 impl IndicatorEngine {
     /// An engine with the given window lengths and learning rates.
@@ -880,6 +918,7 @@ impl IndicatorEngine {
             baro_gps: LagTest::new(BARO_CAP, BARO_SPAN, BARO_GPS_SIGMA0, BARO_GPS_FLOOR, BARO_ALPHA, BARO_TAU, true).with_allowance(BARO_ALLOWANCE),
             baro_gps_pending: f64::NAN,
             imu: LagTest::new(IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true),
+            imu_v: LagTest::new(IMU_V_CAP, IMU_V_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true),
             baro_pending: f64::NAN,
             imu_pending: f64::NAN,
             imu_fold: false,
@@ -916,7 +955,8 @@ impl IndicatorEngine {
         ring("baro", self.baro.ring.len(), fresh.baro.ring.len(), self.baro.head, self.baro.len)?;
         ring("baro_gps", self.baro_gps.ring.len(), fresh.baro_gps.ring.len(), self.baro_gps.head, self.baro_gps.len)?;
         ring("imu", self.imu.ring.len(), fresh.imu.ring.len(), self.imu.head, self.imu.len)?;
-        for (name, m, r) in [("baro", self.baro.motion.len(), self.baro.ring.len()), ("baro_gps", self.baro_gps.motion.len(), self.baro_gps.ring.len()), ("imu", self.imu.motion.len(), self.imu.ring.len())] {
+        ring("imu_v", self.imu_v.ring.len(), fresh.imu_v.ring.len(), self.imu_v.head, self.imu_v.len)?;
+        for (name, m, r) in [("baro", self.baro.motion.len(), self.baro.ring.len()), ("baro_gps", self.baro_gps.motion.len(), self.baro_gps.ring.len()), ("imu", self.imu.motion.len(), self.imu.ring.len()), ("imu_v", self.imu_v.motion.len(), self.imu_v.ring.len())] {
             if m != r {
                 return Err(format!("indicator window {name}: {m} motion entries for a ring of {r}"));
             }
@@ -1072,10 +1112,23 @@ impl IndicatorEngine {
     }
 
 
-    /// Feed one GPS epoch's `z = v_gps − V` (horizontal N, E; V: the
-    /// IMU-predicted velocity changes summed, m/s) at time `t`.
-    pub fn observe_imu(&mut self, t: f64, z: [f64; 2]) {
-        let st = self.imu.push(t, z);
+    /// Feed one GPS epoch's `z = v_gps − V` (N, E, D; V: the IMU-predicted
+    /// velocity changes summed, m/s) at time `t`. The horizontal pair and
+    /// the vertical axis are judged apart, each on its own σ (a multirotor
+    /// shakes more along its thrust), and the vertical statistic is read
+    /// on the horizontal one's scale (`one_axis_as_two`), over twice the
+    /// span (`IMU_V_SPAN`).
+    pub fn observe_imu(&mut self, t: f64, z: [f64; 3]) {
+        let h = self.imu.push(t, [z[0], z[1]]);
+        let v = one_axis_as_two(self.imu_v.push(t, [z[2]]));
+        // Its 6 s windows fill later: it joins once it has learnt
+        // `IMU_ARM_WINDOWS` itself, and the arming waits for the horizontal
+        // test only (waiting for both delayed the horizontal test's call,
+        // and a 1 m/s² bias was partly learnt into the filter before it:
+        // 28 false alarms after the fault in `tests/scenarios.rs`, 13-17
+        // with the horizontal alone).
+        let v = if self.imu_v.learnt() >= IMU_ARM_WINDOWS { v } else { f64::NAN };
+        let st = h.max(v);
         if st.is_finite() {
             self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.max(st) } else { st };
         }
@@ -1087,11 +1140,23 @@ impl IndicatorEngine {
     }
 
     /// The IMU consistency over its most recent `dt` s (see `LagTest::recent`).
+    /// Of the vertical test, only while it leads the horizontal one (its
+    /// window statistic the larger): after a horizontal fault the vertical
+    /// axis moves by a little, which its 6 s σ calls calm only slowly, and
+    /// the episode outlived the fault by a second (`tests/scenarios.rs`).
     pub fn imu_recent(&self, dt: f64) -> f64 {
-        self.imu.recent(dt)
+        let h = self.imu.recent(dt);
+        let leads = self.imu_v.learnt() >= IMU_ARM_WINDOWS && one_axis_as_two(self.imu_v.last_stat()) > self.imu.last_stat();
+        if leads {
+            h.max(one_axis_as_two(self.imu_v.recent(dt)))
+        } else {
+            h
+        }
     }
 
-    /// IMU consistency windows learnt from so far.
+    /// IMU consistency windows learnt from so far (the horizontal test's:
+    /// the vertical one joins once it has learnt as many, see
+    /// `observe_imu`).
     pub fn imu_learnt(&self) -> u32 {
         self.imu.learnt()
     }
@@ -1104,12 +1169,14 @@ impl IndicatorEngine {
     /// The epoch was normal: learn σ of the IMU consistency.
     pub fn accept_imu(&mut self) {
         self.imu.accept();
+        self.imu_v.accept();
     }
 
     /// Restart the IMU (a prediction without IMU, no GPS velocity) or baro
     /// consistency window (a filter reset).
     pub fn clear_imu(&mut self) {
         self.imu.clear();
+        self.imu_v.clear();
     }
     /// Forget the baro test's window (after a baro gap or re-anchoring).
     pub fn clear_baro(&mut self) {
@@ -1497,6 +1564,23 @@ mod tests {
     }
 
     #[test]
+    fn one_axis_statistic_is_read_with_the_two_axis_tail() {
+        // Same tail: exp(−x²) = erfc(|z|/√2).
+        for z in [0.5, 1.0, 2.0, 3.0, 4.43, 6.0, 20.0] {
+            let x = one_axis_as_two(z);
+            assert_abs_diff_eq!((-x * x).exp(), libm::erfc(z / 2f64.sqrt()), epsilon = 1e-12);
+        }
+        // The IMU test's call, 3.4 on the two-axis scale, is |z| ≈ 4.43.
+        assert_abs_diff_eq!(one_axis_as_two(4.43), 3.4, epsilon = 0.01);
+        assert_eq!(one_axis_as_two(0.0), 0.0);
+        assert_eq!(one_axis_as_two(-2.0), one_axis_as_two(2.0));
+        // Beyond erfc's range: finite, continuous, growing like |z|/√2.
+        let (a, b) = (one_axis_as_two(37.0), one_axis_as_two(38.0));
+        assert!(a.is_finite() && b > a && (b - a - 1.0 / 2f64.sqrt()).abs() < 0.01, "{a} {b}");
+        assert!(one_axis_as_two(f64::NAN).is_nan());
+    }
+
+    #[test]
     fn lag_test_allowance_shrinks_the_change_by_the_motion_change() {
         // σ = 1 (α = 0), T = 2 s; 0.02 m per (m/s)², 1 m per m/s of climb.
         let mut l = LagTest::<1>::new(8, 2.0, 1.0, 0.5, 0.0, 0.0, false).with_allowance([0.02, 1.0]);
@@ -1532,7 +1616,7 @@ mod codec_impls {
     impl_codec!(Indicators { r, c, r_group, c_group, inc_group, pv, baro_cons, imu, r_imu });
     impl_codec!(AxisState { prev, r_ref, p_ref, p_peak, ms, last_r, has_prev, has_ref, learnt });
     impl_codec!(IndicatorSettings { window, floor, initial, alpha });
-    impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded });
+    impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, imu_v, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded });
     impl_codec!(PvTest { ring, head, len, sum, since_resum, ms, ms_u, last_u, inc, inc_len, inc_head, inc_cap, stat, learnt_u, learnt_s });
     impl_codec!(LagTest<const D: usize> { ring, motion, allow, head, len, span, ms, floor, alpha, hold, rate, tau, t_rate, last_s, last_dt, last_t, learnt, fast_start });
 }
