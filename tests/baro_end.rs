@@ -22,3 +22,15 @@ fn a_baro_step_that_ends_is_not_flagged_for_its_return() {
     let (n, of) = flagged_after(&f, 20.0);
     assert!(of >= 18 && n == 0, "{n} of {of} epochs flagged in the 20 s after the step");
 }
+
+/// Regression: tune #232 (aggressive, 1 Hz GPS): a 9.4 m baro step whose
+/// last 4 s passed as normal, so the baro's level against the Doppler
+/// integral learnt the stepped level; its return jump (back onto the GPS
+/// altitude) was flagged for the next 6 epochs.
+#[test]
+fn a_baro_step_return_is_recognised_on_the_gps_altitude_level() {
+    let f = Flight::draw(Split::Tune, 232);
+    assert_eq!(f.faults[0].kind.name(), "baro-step");
+    let (n, of) = flagged_after(&f, 20.0);
+    assert!(of >= 18 && n <= 1, "{n} of {of} epochs flagged in the 20 s after the step");
+}

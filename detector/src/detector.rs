@@ -319,6 +319,11 @@ const RAMP_R_SCALE: f64 = 2.8 / crate::ramp::RAMP_Z;
 /// The baro flatline's z-score into the baro group's R, the same way
 /// (`flatline::Z` just above the boundary).
 const FLAT_R_SCALE: f64 = 2.8 / flatline::Z;
+/// A baro jump seen on both levels: they moved by the same amount, within
+/// this share of the jump and within `NEAR_SIGMAS` of the Doppler level's
+/// σ (the GPS altitude's own noise at that epoch is in the difference).
+const BARO_JUMP_AGREE: f64 = 0.3;
+const NEAR_SIGMAS: f64 = 2.5;
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
 const RECOVER_INC: f64 = 2.0;
@@ -1210,11 +1215,27 @@ impl Consistency {
         (if bn * zn > 0.0 { bn.abs().min(zn.abs()) } else { 0.0 }, false)
     }
 
-    /// The baro came back onto both its levels at this epoch (see
-    /// `VelocityTrack::returned`): a baro fault ended. A GPS altitude fault
-    /// moves only the level against the GPS altitude.
+    /// The baro came back onto its level against the GPS altitude at this
+    /// epoch (see `VelocityTrack::returned`), and the jump was the baro's:
+    /// its level against the Doppler integral came back too, or jumped by
+    /// the same amount (that level's baseline may have learnt a fault that
+    /// was not flagged to its end: battery tune #232, a 9.4 m step whose
+    /// last 4 s passed as normal, then 6 s of flags on its return). A GPS
+    /// altitude fault's end moves only the first level.
     fn baro_returned(&self) -> bool {
-        self.baro_gps_level.returned() && self.baro_dop_level.returned()
+        if !self.baro_gps_level.returned() {
+            return false;
+        }
+        if self.baro_dop_level.returned() {
+            return true;
+        }
+        match (self.baro_gps_level.offset(0), self.baro_dop_level.offset(0)) {
+            (Some((g, gp, _)), Some((d, dp, sd))) => {
+                let (jg, jd) = (g - gp, d - dp);
+                (jd - jg).abs() < BARO_JUMP_AGREE * jg.abs() && (jd - jg).abs() < NEAR_SIGMAS * sd
+            }
+            _ => false,
+        }
     }
 
     /// A position episode's jump confirmed, over the seconds after it, as
@@ -2401,7 +2422,7 @@ impl Detector {
         // in the baro's 6 s windows and its Δr, which a baro released
         // during the fault had re-based on the faulty level (battery tune
         // #175: a 7.9 m step for 66 s, its end flagged for 5.6 s).
-        let baro_back = !self.oracle && self.episode.active && self.consistency.baro_returned();
+        let baro_back = !self.oracle && (self.episode.active || verdict.fault) && self.consistency.baro_returned();
         if baro_back {
             restart_baro(Some(&mut *kf), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
         }
