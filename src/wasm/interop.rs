@@ -540,3 +540,17 @@ pub fn strings(items: &[String]) -> JsValue {
 pub fn string_pairs(items: &[(String, String)]) -> JsValue {
     array_of(items, |(k, v)| Array::of2(&JsValue::from_str(k), &JsValue::from_str(v)).into())
 }
+
+/// The detector's counters as JS sees them (camelCase, like the rest of the API).
+pub fn stats_object(s: &crate::detector::Stats) -> JsValue {
+    Obj::new()
+        .n("rows", s.rows as f64)
+        .n("gpsEpochs", s.gps_epochs as f64)
+        .n("imuRows", s.imu_rows as f64)
+        .n("baroRows", s.baro_rows as f64)
+        .n("retrains", s.retrains as f64)
+        .n("filterResets", s.filter_resets as f64)
+        .n("dataGaps", s.data_gaps as f64)
+        .n("filterErrors", s.filter_errors as f64)
+        .done()
+}
