@@ -1,0 +1,509 @@
+//! Decimal text to `f64`, correctly rounded: the same value, bit for bit,
+//! and the same accepted and refused strings as `str::parse::<f64>`, which
+//! the tests below hold it to (random and crafted inputs: every decimal
+//! form of random doubles, the halfway points between neighbours, long and
+//! exponent-heavy strings, and garbage).
+//!
+//! Why not std's: its Eisel-Lemire step carries a 10.4 KB table of 128-bit
+//! powers of five, the largest piece of data in the core wasm module after
+//! the embedded model, for one call in the CSV reader. Here the common
+//! cells (up to 19 significant digits, a decimal exponent within ±19) are
+//! exact in `f64` or `u128` arithmetic, and the rest is exact big-integer
+//! arithmetic: slower, but only for strings no logger writes (20 or more
+//! significant digits, or exponents past ±19), and never wrong.
+
+use std::cmp::Ordering;
+
+/// Significant digits kept; the rest only say whether anything nonzero
+/// follows (a halfway point between two doubles has at most 767
+/// significant digits, so past 800 only "above or at" matters).
+const MAX_DIGITS: usize = 800;
+
+/// `s` as an `f64`, or `None` where `str::parse::<f64>` would fail.
+/// Grammar (std's): an optional sign, then `inf`, `infinity` or `nan` in
+/// any case, or digits with an optional `.` (at least one digit on either
+/// side), then an optional `e`/`E`, optional sign and at least one digit.
+pub fn parse_f64(s: &str) -> Option<f64> {
+    let b = s.as_bytes();
+    let (neg, b) = match b.first() {
+        Some(b'-') => (true, &b[1..]),
+        Some(b'+') => (false, &b[1..]),
+        _ => (false, b),
+    };
+    if b.is_empty() {
+        return None;
+    }
+    let v = match number(b) {
+        Some(v) => v,
+        None if b.eq_ignore_ascii_case(b"nan") => f64::NAN,
+        None if b.eq_ignore_ascii_case(b"inf") || b.eq_ignore_ascii_case(b"infinity") => f64::INFINITY,
+        None => return None,
+    };
+    Some(if neg { -v } else { v })
+}
+
+/// An unsigned decimal number (no sign, no inf/nan).
+fn number(b: &[u8]) -> Option<f64> {
+    // Significant digits (leading zeros dropped), at most MAX_DIGITS of
+    // them; `exp`: the power of ten of the last digit kept.
+    let mut digits: Vec<u8> = Vec::new();
+    let mut truncated = false;
+    let mut exp: i64 = 0;
+    let mut any = false;
+    let mut i = 0;
+    let mut seen_dot = false;
+    while i < b.len() {
+        let c = b[i];
+        if c.is_ascii_digit() {
+            any = true;
+            let d = c - b'0';
+            if seen_dot {
+                // a fraction digit: one more power of ten down, unless
+                // dropped (then the kept digits' power stays)
+                if digits.len() < MAX_DIGITS {
+                    if d != 0 || !digits.is_empty() {
+                        digits.push(d);
+                    }
+                    exp -= 1;
+                } else {
+                    truncated |= d != 0;
+                }
+            } else if digits.len() < MAX_DIGITS {
+                if d != 0 || !digits.is_empty() {
+                    digits.push(d);
+                }
+            } else {
+                truncated |= d != 0;
+                exp += 1;
+            }
+        } else if c == b'.' && !seen_dot {
+            seen_dot = true;
+        } else {
+            break;
+        }
+        i += 1;
+    }
+    if !any {
+        return None;
+    }
+    if i < b.len() {
+        if b[i] != b'e' && b[i] != b'E' {
+            return None;
+        }
+        i += 1;
+        let neg = match b.get(i) {
+            Some(b'-') => {
+                i += 1;
+                true
+            }
+            Some(b'+') => {
+                i += 1;
+                false
+            }
+            _ => false,
+        };
+        let start = i;
+        // Saturates as std's does (it stops adding digits at 0x10000).
+        let mut e: i64 = 0;
+        while i < b.len() && b[i].is_ascii_digit() {
+            if e < 0x10000 {
+                e = 10 * e + i64::from(b[i] - b'0');
+            }
+            i += 1;
+        }
+        if i == start || i < b.len() {
+            return None;
+        }
+        exp += if neg { -e } else { e };
+    }
+    // Trailing zeros of the kept digits go into the exponent.
+    while digits.last() == Some(&0) {
+        digits.pop();
+        exp += 1;
+    }
+    Some(value(&digits, exp, truncated))
+}
+
+/// Exact powers of ten as `f64` (10^22 is the largest).
+fn pow10_f64(e: usize) -> f64 {
+    let mut p = 1.0;
+    for _ in 0..e {
+        p *= 10.0;
+    }
+    p
+}
+
+/// `digits` × 10^`exp` (plus something below one unit of the last digit
+/// when `truncated`), correctly rounded.
+fn value(digits: &[u8], exp: i64, truncated: bool) -> f64 {
+    let n = digits.len() as i64;
+    if n == 0 {
+        return 0.0;
+    }
+    // The value lies in [10^(lead-1), 10^lead).
+    let lead = n + exp;
+    if lead > 310 {
+        return f64::INFINITY;
+    }
+    if lead < -323 {
+        return 0.0;
+    }
+    if n <= 19 && !truncated {
+        let m = digits.iter().fold(0u64, |m, &d| 10 * m + u64::from(d));
+        // Clinger's fast path: both exact, one rounding.
+        if m < 1 << 53 && (-22..=22).contains(&exp) {
+            let p = pow10_f64(exp.unsigned_abs() as usize);
+            return if exp < 0 { m as f64 / p } else { m as f64 * p };
+        }
+        if (0..=38).contains(&exp) {
+            // m × 10^exp exact in u128 when it fits; `as` rounds to nearest.
+            if let Some(v) = (m as u128).checked_mul(10u128.pow(exp as u32)) {
+                return v as f64;
+            }
+        } else if (-19..0).contains(&exp) {
+            // m / 10^-exp: m shifted to the top of 128 bits over a divisor
+            // below 2^64 gives a quotient of 64 bits or more; a nonzero
+            // remainder becomes a sticky low bit, below the rounding bit.
+            let p = 10u128.pow((-exp) as u32);
+            let z = m.leading_zeros() + 64;
+            let a = (m as u128) << z;
+            let q = a / p;
+            let q = q | u128::from(a % p != 0);
+            return q as f64 * pow2(-(z as i32));
+        }
+    }
+    slow(digits, exp, truncated)
+}
+
+/// 2^e as an `f64`, for e in the normal range.
+fn pow2(e: i32) -> f64 {
+    f64::from_bits(((e + 1023) as u64) << 52)
+}
+
+/// Exact: value = A / B with A = D × 10^max(exp,0), B = 10^max(-exp,0).
+fn slow(digits: &[u8], exp: i64, truncated: bool) -> f64 {
+    let mut a = Big::from_digits(digits);
+    let mut b = Big(vec![1]);
+    if exp >= 0 {
+        a.mul_pow10(exp as usize);
+    } else {
+        b.mul_pow10((-exp) as usize);
+    }
+    // k = floor(log2(A / B)): a - b or one less (a, b the bit lengths).
+    let d = a.bits() as i64 - b.bits() as i64;
+    let ge = if d >= 0 { a.cmp(&b.shl(d as usize)) } else { a.shl((-d) as usize).cmp(&b) };
+    let k = if ge == Ordering::Less { d - 1 } else { d };
+    if k > 1023 {
+        return f64::INFINITY;
+    }
+    if k < -1076 {
+        return 0.0;
+    }
+    // Scale so that the quotient is the 53-bit mantissa (or, below the
+    // normal range, the subnormal's units of 2^-1074).
+    let t = if k >= -1022 { 52 - k } else { 1074 };
+    let mut r = if t > 0 { a.shl(t as usize) } else { a };
+    let mut bs = if t < 0 { b.shl((-t) as usize) } else { b };
+    // Long division: m < 2^53, so 54 quotient bits at most.
+    let mut m: u64 = 0;
+    let mut sh = bs.shl(53);
+    for i in (0..=53).rev() {
+        if r.cmp(&sh) != Ordering::Less {
+            r.sub(&sh);
+            m |= 1 << i;
+        }
+        sh.shr1();
+    }
+    // Round half to even on the remainder (truncated digits: above half).
+    r.shl1();
+    bs.trim();
+    match r.cmp(&bs) {
+        Ordering::Greater => m += 1,
+        Ordering::Equal if truncated || m & 1 == 1 => m += 1,
+        _ => {}
+    }
+    if k >= -1022 {
+        let mut k = k;
+        if m == 1 << 53 {
+            m = 1 << 52;
+            k += 1;
+        }
+        if k > 1023 {
+            return f64::INFINITY;
+        }
+        f64::from_bits((((k + 1023) as u64) << 52) | (m & ((1 << 52) - 1)))
+    } else {
+        // m up to 2^52 inclusive: 2^52 is the bit pattern of MIN_POSITIVE.
+        f64::from_bits(m)
+    }
+}
+
+/// An unsigned big integer, 32-bit limbs, least significant first.
+struct Big(Vec<u32>);
+
+impl Big {
+    fn from_digits(digits: &[u8]) -> Big {
+        let mut x = Big(Vec::with_capacity(digits.len() / 9 + 1));
+        for chunk in digits.chunks(9) {
+            let v = chunk.iter().fold(0u32, |v, &d| 10 * v + u32::from(d));
+            x.mul_add(10u32.pow(chunk.len() as u32), v);
+        }
+        x
+    }
+
+    /// self = self × m + add.
+    fn mul_add(&mut self, m: u32, add: u32) {
+        let mut carry = u64::from(add);
+        for l in self.0.iter_mut() {
+            let v = u64::from(*l) * u64::from(m) + carry;
+            *l = v as u32;
+            carry = v >> 32;
+        }
+        if carry != 0 {
+            self.0.push(carry as u32);
+        }
+    }
+
+    fn mul_pow10(&mut self, mut e: usize) {
+        while e >= 9 {
+            self.mul_add(1_000_000_000, 0);
+            e -= 9;
+        }
+        if e > 0 {
+            self.mul_add(10u32.pow(e as u32), 0);
+        }
+    }
+
+    fn trim(&mut self) {
+        while self.0.last() == Some(&0) {
+            self.0.pop();
+        }
+    }
+
+    fn bits(&self) -> usize {
+        match self.0.iter().rposition(|&l| l != 0) {
+            Some(i) => 32 * i + 32 - self.0[i].leading_zeros() as usize,
+            None => 0,
+        }
+    }
+
+    fn shl(&self, n: usize) -> Big {
+        let (w, s) = (n / 32, (n % 32) as u32);
+        let mut out = vec![0u32; w];
+        let mut carry = 0u32;
+        for &l in &self.0 {
+            if s == 0 {
+                out.push(l);
+            } else {
+                out.push((l << s) | carry);
+                carry = l >> (32 - s);
+            }
+        }
+        if carry != 0 {
+            out.push(carry);
+        }
+        let mut x = Big(out);
+        x.trim();
+        x
+    }
+
+    fn shl1(&mut self) {
+        *self = self.shl(1);
+    }
+
+    fn shr1(&mut self) {
+        let mut carry = 0u32;
+        for l in self.0.iter_mut().rev() {
+            let v = *l;
+            *l = (v >> 1) | (carry << 31);
+            carry = v & 1;
+        }
+        self.trim();
+    }
+
+    /// Compare, ignoring high zero limbs.
+    fn cmp(&self, other: &Big) -> Ordering {
+        let (a, b) = (self.len(), other.len());
+        if a != b {
+            return a.cmp(&b);
+        }
+        for i in (0..a).rev() {
+            match self.0[i].cmp(&other.0[i]) {
+                Ordering::Equal => {}
+                o => return o,
+            }
+        }
+        Ordering::Equal
+    }
+
+    /// Limbs without the high zero ones.
+    fn len(&self) -> usize {
+        self.0.iter().rposition(|&l| l != 0).map_or(0, |i| i + 1)
+    }
+
+    /// self -= other (self ≥ other).
+    fn sub(&mut self, other: &Big) {
+        let mut borrow = 0i64;
+        for i in 0..self.0.len() {
+            let v = i64::from(self.0[i]) - i64::from(other.0.get(i).copied().unwrap_or(0)) - borrow;
+            self.0[i] = v as u32;
+            borrow = i64::from(v < 0);
+        }
+        self.trim();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_f64;
+
+    /// A small deterministic generator (xorshift64*).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+        }
+        fn below(&mut self, n: u64) -> u64 {
+            self.next() % n
+        }
+    }
+
+    /// Same result as std's, bit for bit (NaN's sign included), or both refuse.
+    fn same(s: &str) -> bool {
+        let ours = parse_f64(s).map(f64::to_bits);
+        let std = s.parse::<f64>().ok().map(f64::to_bits);
+        assert_eq!(ours, std, "{s:?}: ours {:?}, std {:?}", parse_f64(s), s.parse::<f64>().ok());
+        std.is_some()
+    }
+
+    #[test]
+    fn crafted_strings_match_std() {
+        let cases = [
+            "0", "-0", "+0", "0.0", ".0", "0.", ".", "", "+", "-", "e5", "1e", "1e+", "1e-", "1E5", "1e+5", "1e-5", "1.e5", ".5e1",
+            "1..2", "1.2.3", "--1", "+-1", " 1", "1 ", "1e5.5", "0x10", "1_000", "inf", "-inf", "+inf", "INF", "Infinity", "-infinity",
+            "infinit", "infinityy", "nan", "NaN", "-nan", "+NAN", "nana", "in", "na", "1.7976931348623157e308", "1.7976931348623158e308",
+            "1.7976931348623159e308", "1.797693134862315807e308", "1.7976931348623157081e308", "2e308", "1e309", "4.9e-324",
+            "4.940656458412465441765687928682213723651e-324", "2.4703282292062327e-324", "2.4703282292062328e-324",
+            "2.470328229206232720882538e-324", "2.2250738585072011e-308", "2.2250738585072012e-308", "2.2250738585072014e-308",
+            "1e-400", "1e-324", "3e-324", "0.1", "0.2", "0.3", "123456789012345678901234567890", "9007199254740993",
+            "9007199254740992.5", "9007199254740993.0000000000000000000001", "1e23", "8.98846567431158e307", "0.000000000000000000000000001",
+            "47.39774190000001", "8.5", "-122.1234567", "1e19", "12345678901234567890", "18446744073709551615", "18446744073709551616",
+            "1e-19", "1e-20", "1e-21", "1e-22", "1e-23", "123456789012345678e-30", "1e65535", "1e65536", "1e655359", "1e999999999999",
+            "1e-999999999999", "0e999999999999", "0.0000e-99999", "00000000000000000000001.5", "1.00000000000000000000000000000000000001",
+        ];
+        for s in cases {
+            same(s);
+        }
+        // Long strings: digits past the cap, zeros before and after.
+        let long = format!("1.{}1", "0".repeat(900));
+        same(&long);
+        same(&format!("0.{}1e{}", "0".repeat(2000), 1990));
+        same(&format!("{}e-{}", "9".repeat(1000), 700));
+        same(&format!("1{}e-1000", "0".repeat(1300)));
+        // Halfway between 1 and the next double, then a 1 far past the cap.
+        same(&format!("1.00000000000000011102230246251565404236316680908203125{}1", "0".repeat(900)));
+        same("1.00000000000000011102230246251565404236316680908203125");
+        same("1.00000000000000011102230246251565404236316680908203124");
+        // The exponent saturates as std's does.
+        same(&format!("0.{}1e70000", "0".repeat(69990)));
+    }
+
+    #[test]
+    fn every_form_of_random_doubles_and_their_halfway_points_match_std() {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut parsed = 0;
+        for i in 0..200_000 {
+            let x = match i % 4 {
+                // any finite double
+                0 => f64::from_bits(rng.next() & !(0x7ff << 52) | (rng.below(2047) << 52)),
+                // log-like magnitudes
+                1 => (rng.below(2_000_000) as f64 - 1e6) * 10f64.powi(rng.below(12) as i32 - 8),
+                2 => f64::from_bits(rng.below(1 << 60)),
+                _ => f64::from_bits(rng.below(1 << 53)),
+            };
+            for s in [format!("{x}"), format!("{x:e}"), format!("{x:.3}"), format!("{x:.17e}"), format!("{x:.25e}"), format!("{x:.0}")] {
+                parsed += usize::from(same(&s));
+            }
+            // The exact halfway point to the next double up, and just off it.
+            if x.is_finite() && x > 0.0 && i % 8 == 0 {
+                let up = f64::from_bits(x.to_bits() + 1);
+                if up.is_finite() {
+                    let h = halfway(x);
+                    same(&h);
+                    let (mant, ex) = h.split_once('e').map_or((h.as_str(), String::new()), |(a, b)| (a, format!("e{b}")));
+                    // a hair above (a 1 appended) and below (the last digit one less)
+                    same(&format!("{mant}.1{ex}").replacen("..", ".", 1));
+                    let last = mant.as_bytes()[mant.len() - 1];
+                    if last > b'0' {
+                        same(&format!("{}{}{ex}", &mant[..mant.len() - 1], char::from(last - 1)));
+                    }
+                }
+            }
+        }
+        assert!(parsed > 1_000_000, "{parsed}");
+    }
+
+    /// The exact decimal expansion of the midpoint of `x` (> 0) and the next
+    /// double up: (2m + 1) × 2^(e - 1), in base-10^9 limbs.
+    fn halfway(x: f64) -> String {
+        let bits = x.to_bits();
+        let (e, m) = ((bits >> 52) as i64, bits & ((1 << 52) - 1));
+        let (m, e) = if e == 0 { (m, -1074) } else { (m | (1 << 52), e - 1075) };
+        let n = 2 * m + 1; // × 2^(e - 1)
+        let e = e - 1;
+        let mut limbs: Vec<u64> = vec![n % 1_000_000_000, n / 1_000_000_000 % 1_000_000_000, n / 1_000_000_000_000_000_000];
+        let mul = |l: &mut Vec<u64>, k: u64| {
+            let mut carry = 0;
+            for x in l.iter_mut() {
+                let v = *x * k + carry;
+                *x = v % 1_000_000_000;
+                carry = v / 1_000_000_000;
+            }
+            while carry > 0 {
+                l.push(carry % 1_000_000_000);
+                carry /= 1_000_000_000;
+            }
+        };
+        // n × 2^e for e ≥ 0; n × 5^-e (× 10^e) for e < 0
+        let (base, chunk, mut left) = if e >= 0 { (2u64, 1u64 << 28, e) } else { (5, 244_140_625, -e) };
+        let per = if e >= 0 { 28 } else { 12 };
+        while left >= per {
+            mul(&mut limbs, chunk);
+            left -= per;
+        }
+        mul(&mut limbs, base.pow(left as u32));
+        while limbs.len() > 1 && limbs.last() == Some(&0) {
+            limbs.pop();
+        }
+        let mut s = limbs.last().unwrap().to_string();
+        for l in limbs.iter().rev().skip(1) {
+            s += &format!("{l:09}");
+        }
+        if e >= 0 {
+            s
+        } else {
+            format!("{s}e{e}")
+        }
+    }
+
+    #[test]
+    fn random_strings_match_std() {
+        let mut rng = Rng(42);
+        let alphabet = b"0123456789000.eE+-naifty";
+        let mut accepted = 0;
+        for _ in 0..300_000 {
+            let len = 1 + rng.below(30) as usize;
+            let s: String = (0..len).map(|_| char::from(alphabet[rng.below(alphabet.len() as u64) as usize])).collect();
+            accepted += usize::from(same(&s));
+            // a well-formed number of random digits and exponent
+            let digits: String = (0..1 + rng.below(40)).map(|_| char::from(b'0' + rng.below(10) as u8)).collect();
+            let dot = rng.below(digits.len() as u64 + 1) as usize;
+            let s = format!("{}.{}e{}", &digits[..dot], &digits[dot..], rng.below(700) as i64 - 350);
+            accepted += usize::from(same(&s));
+        }
+        assert!(accepted > 300_000, "{accepted}");
+    }
+}
