@@ -23,6 +23,7 @@ const MAX_DIGITS: usize = 800;
 /// Grammar (std's): an optional sign, then `inf`, `infinity` or `nan` in
 /// any case, or digits with an optional `.` (at least one digit on either
 /// side), then an optional `e`/`E`, optional sign and at least one digit.
+#[inline(never)]
 pub fn parse_f64(s: &str) -> Option<f64> {
     let b = s.as_bytes();
     let (neg, b) = match b.first() {
@@ -181,6 +182,8 @@ fn pow2(e: i32) -> f64 {
 }
 
 /// Exact: value = A / B with A = D × 10^max(exp,0), B = 10^max(-exp,0).
+#[cold]
+#[inline(never)]
 fn slow(digits: &[u8], exp: i64, truncated: bool) -> f64 {
     let mut a = Big::from_digits(digits);
     let mut b = Big(vec![1]);
