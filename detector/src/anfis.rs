@@ -130,6 +130,7 @@ impl Anfis {
 
     /// Least-squares step: consequents for fixed premises. `ridge` (≥0)
     /// regularises rules that no sample fires.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn fit_consequents(&mut self, xs: &[[f64; 2]], ys: &[f64], ridge: f64) -> bool {
         let n = xs.len().min(ys.len());
         if n == 0 {
@@ -193,6 +194,7 @@ impl Anfis {
     }
 
     /// Mean squared error over a data set.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn mse(&self, xs: &[[f64; 2]], ys: &[f64]) -> f64 {
         let n = xs.len().min(ys.len());
         if n == 0 {
@@ -203,6 +205,7 @@ impl Anfis {
 
     /// Gradient of the mean squared error w.r.t. premise parameters
     /// (`[input][mf]` for centres, then widths).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn premise_gradient(&self, xs: &[[f64; 2]], ys: &[f64]) -> ([[f64; M]; 2], [[f64; M]; 2]) {
         let n = xs.len().min(ys.len());
         let mut gc = [[0.0; M]; 2];
@@ -259,6 +262,7 @@ impl Anfis {
     /// Hybrid learning: alternate least squares on consequents and
     /// `epochs` gradient steps on premises with step `lr`. Returns final MSE.
     /// Parameters that would become non-finite are left as they were.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn train_hybrid(&mut self, xs: &[[f64; 2]], ys: &[f64], epochs: usize, lr: f64) -> f64 {
         let ridge = 1e-6 * xs.len().max(1) as f64;
         self.fit_consequents(xs, ys, ridge);
@@ -294,6 +298,7 @@ impl Anfis {
     }
 
     /// Every parameter finite and every width positive.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn is_finite(&self) -> bool {
         self.centre.iter().flatten().all(|v| v.is_finite())
             && self.sigma.iter().flatten().all(|v| v.is_finite() && *v > 0.0)

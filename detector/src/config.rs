@@ -158,6 +158,7 @@ impl ConfigInput {
 
     /// Validate into a [`Config`].
     #[inline]
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check(&self) -> Result<Config, ConfigError> {
         let d = Config::default();
         let method = match &self.method {

@@ -249,6 +249,7 @@ impl Ring {
         &self.buf[..self.len]
     }
     /// Indices in range and capacity `q` (a restored snapshot may be forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn check_shape(&self, q: usize, name: &str) -> Result<(), String> {
         let cap = self.buf.len();
         if cap != q.max(1) || self.head >= cap || self.len > cap {
@@ -1780,6 +1781,7 @@ impl Episode {
     }
 
     /// The filter was re-anchored on GPS: nothing coasts any more.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn reanchored(&mut self) {
         self.coast_start = None;
         self.calm_epochs = 0;
@@ -1811,6 +1813,7 @@ struct Learning {
 }
 
 impl Learning {
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn new(model: &Model, q: usize) -> Self {
         Learning {
             anfis: model.anfis.clone(),
@@ -1872,6 +1875,7 @@ impl Detector {
 
     /// Detector with an explicit model (the config's `model` field is ignored).
     #[inline]
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn with_model(cfg: Config, model: &Model) -> Self {
         Detector {
             kf: None,
@@ -1901,6 +1905,7 @@ impl Detector {
     /// snapshot is an error, not an index panic later), and restore the
     /// scratch buffers that snapshots do not carry.
     #[inline]
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub(crate) fn check_restored(&mut self) -> Result<(), String> {
         let checked = self.cfg.to_input().check()?;
         if checked != self.cfg {
@@ -2128,6 +2133,7 @@ impl Detector {
 
     /// Every sensor stopped: a logging gap, not a navigation fault. No
     /// verdict carries across it: it starts from "no GPS yet".
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn data_gap(&mut self) {
         self.stats.data_gaps += 1;
         self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
@@ -2196,6 +2202,7 @@ impl Detector {
         self.kf.as_ref().is_some_and(kf_flying)
     }
 
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn filter_failed(&mut self, _e: FilterError) {
         // Re-initialise at the next fix; keep the verdict history.
         self.stats.filter_errors += 1;
@@ -2247,6 +2254,7 @@ impl Detector {
 
     /// The first fix, or the first after a data gap or a filter error,
     /// starts the filter on it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn start_filter(&mut self, fix: &Fix) {
         let noise = self.cfg.filter_noise();
         let v0 = fix.vel.unwrap_or_else(Vector3::zeros);
@@ -2380,6 +2388,7 @@ impl Detector {
     }
 
     /// The filter was re-anchored on GPS: every reference restarts.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn reanchored(&mut self) {
         self.stats.filter_resets += 1;
         self.episode.reanchored();
@@ -2415,6 +2424,7 @@ impl Detector {
     /// misclassifies more of D0 (the shipped model's own databases) than the
     /// current one: online data may drift, but not so far that the detector
     /// forgets the labelled faults it shipped with.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn retrain(&mut self) {
         let l = &mut self.learning;
         let w = l.retrain_samples();
@@ -2449,6 +2459,7 @@ impl Detector {
     }
 
     /// Misclassified D0 samples at the configured threshold.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn d0_errors(&self, a: &Anfis) -> usize {
         let th = self.cfg.threshold;
         let l = &self.learning;

@@ -855,6 +855,7 @@ impl IndicatorEngine {
 
     /// Every ring's capacity and indices match a fresh engine with settings
     /// `set` (a restored snapshot may be corrupt or forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub(crate) fn check_shape(&self, set: &IndicatorSettings) -> Result<(), String> {
         if self.set != *set {
             return Err("indicator settings do not match the config".into());

@@ -9,6 +9,11 @@
 //! at opt-level 3 and what sits above it (the wasm facade, the audit
 //! summary, snapshot and restore) for size: cargo sets opt-levels per
 //! crate (see `[profile.wasm-core]` in the workspace's `Cargo.toml`).
+// Cold code compiled for size inside this opt-level-3 crate: the core
+// wasm build (.ci/build) passes `--cfg navguard_cold_size` (its toolchain
+// takes unstable features under RUSTC_BOOTSTRAP, as for -Z build-std);
+// every other build compiles it as before.
+#![cfg_attr(navguard_cold_size, feature(optimize_attribute))]
 
 pub mod anfis;
 pub mod codec;

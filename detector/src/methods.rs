@@ -238,6 +238,7 @@ impl MahaWindow {
     }
 
     /// Ring capacity and indices in range (a restored snapshot may be forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check_shape(&self) -> Result<(), String> {
         let cap = self.ring.len();
         if cap != MAHA_WINDOW || self.head >= cap || self.len > cap {

@@ -447,6 +447,7 @@ impl Default for AdaptiveConfig {
 
 impl AdaptiveConfig {
     /// Every parameter in range; the error names it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check(&self) -> Result<(), String> {
         check_w(self.w)?;
         check_psi(self.psi)?;
@@ -712,6 +713,7 @@ impl ThresholdPool {
     }
 
     /// Check a pool (e.g. one deserialised from JSON) before use.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check(&self) -> Result<(), String> {
         check_w(self.w)?;
         if self.modes.is_empty() {
@@ -747,6 +749,7 @@ pub struct SpeedBands {
 
 impl SpeedBands {
     /// Bands from finite, strictly increasing edges (m/s).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn new(edges: Vec<f64>) -> Result<Self, String> {
         if let Some(i) = edges.iter().position(|e| !e.is_finite()) {
             return Err(format!("edges[{i}] = {}: must be finite", edges[i]));
@@ -790,6 +793,7 @@ struct TwoStage {
 }
 
 impl TwoStage {
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn new(w: usize) -> Result<Self, String> {
         check_w(w)?;
         Ok(TwoStage {
@@ -873,6 +877,7 @@ pub struct Evaluator {
 
 impl Evaluator {
     /// A streaming evaluator over a checked pool.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn new(pool: ThresholdPool) -> Result<Self, String> {
         pool.check()?;
         let core = TwoStage::new(pool.w)?;
@@ -886,6 +891,7 @@ impl Evaluator {
 
     /// The pool validates and the ring buffers match its window (a state
     /// read back from a snapshot may be corrupt or forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check_shape(&self) -> Result<(), String> {
         self.pool.check()?;
         let c = &self.core;

@@ -43,8 +43,86 @@ pub fn parse_f64(s: &str) -> Option<f64> {
     Some(if neg { -v } else { v })
 }
 
-/// An unsigned decimal number (no sign, no inf/nan).
+/// An unsigned decimal number (no sign, no inf/nan). One pass, with no
+/// allocation, for up to 19 significant digits (every cell a logger
+/// writes); longer ones are read again by [`number_long`].
 fn number(b: &[u8]) -> Option<f64> {
+    let mut m: u64 = 0;
+    let mut n = 0; // significant digits in m
+    let mut exp: i64 = 0; // value = m × 10^exp
+    let mut any = false;
+    let mut seen_dot = false;
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        if c.is_ascii_digit() {
+            any = true;
+            let d = c - b'0';
+            if n == 19 {
+                return number_long(b);
+            }
+            if d != 0 || n > 0 {
+                m = 10 * m + u64::from(d);
+                n += 1;
+            }
+            if seen_dot {
+                exp -= 1;
+            }
+        } else if c == b'.' && !seen_dot {
+            seen_dot = true;
+        } else {
+            break;
+        }
+        i += 1;
+    }
+    if !any {
+        return None;
+    }
+    exp += exponent(&b[i..])?;
+    if m == 0 {
+        return Some(0.0);
+    }
+    while m % 10 == 0 {
+        m /= 10;
+        exp += 1;
+        n -= 1;
+    }
+    Some(small(m, n, exp))
+}
+
+/// The exponent part (`e`/`E`, optional sign, digits) or nothing; `None`
+/// for anything else. Saturates as std's does (it stops adding digits at
+/// 0x10000).
+fn exponent(b: &[u8]) -> Option<i64> {
+    let Some((&first, rest)) = b.split_first() else { return Some(0) };
+    if first != b'e' && first != b'E' {
+        return None;
+    }
+    let (neg, digits) = match rest.split_first() {
+        Some((b'-', d)) => (true, d),
+        Some((b'+', d)) => (false, d),
+        _ => (false, rest),
+    };
+    if digits.is_empty() {
+        return None;
+    }
+    let mut e: i64 = 0;
+    for &c in digits {
+        if !c.is_ascii_digit() {
+            return None;
+        }
+        if e < 0x10000 {
+            e = 10 * e + i64::from(c - b'0');
+        }
+    }
+    Some(if neg { -e } else { e })
+}
+
+/// A number of more than 19 significant digits: its digits kept (up to
+/// MAX_DIGITS) for the exact path.
+#[cold]
+#[inline(never)]
+fn number_long(b: &[u8]) -> Option<f64> {
     // Significant digits (leading zeros dropped), at most MAX_DIGITS of
     // them; `exp`: the power of ten of the last digit kept.
     let mut digits: Vec<u8> = Vec::new();
@@ -87,42 +165,17 @@ fn number(b: &[u8]) -> Option<f64> {
     if !any {
         return None;
     }
-    if i < b.len() {
-        if b[i] != b'e' && b[i] != b'E' {
-            return None;
-        }
-        i += 1;
-        let neg = match b.get(i) {
-            Some(b'-') => {
-                i += 1;
-                true
-            }
-            Some(b'+') => {
-                i += 1;
-                false
-            }
-            _ => false,
-        };
-        let start = i;
-        // Saturates as std's does (it stops adding digits at 0x10000).
-        let mut e: i64 = 0;
-        while i < b.len() && b[i].is_ascii_digit() {
-            if e < 0x10000 {
-                e = 10 * e + i64::from(b[i] - b'0');
-            }
-            i += 1;
-        }
-        if i == start || i < b.len() {
-            return None;
-        }
-        exp += if neg { -e } else { e };
-    }
+    exp += exponent(&b[i..])?;
     // Trailing zeros of the kept digits go into the exponent.
     while digits.last() == Some(&0) {
         digits.pop();
         exp += 1;
     }
-    Some(value(&digits, exp, truncated))
+    if digits.len() <= 19 && !truncated {
+        let m = digits.iter().fold(0u64, |m, &d| 10 * m + u64::from(d));
+        return Some(if m == 0 { 0.0 } else { small(m, digits.len(), exp) });
+    }
+    Some(slow(&digits, exp, truncated))
 }
 
 /// Exact powers of ten as `f64` (10^22 is the largest).
@@ -134,46 +187,90 @@ fn pow10_f64(e: usize) -> f64 {
     p
 }
 
-/// `digits` × 10^`exp` (plus something below one unit of the last digit
-/// when `truncated`), correctly rounded.
-fn value(digits: &[u8], exp: i64, truncated: bool) -> f64 {
-    let n = digits.len() as i64;
-    if n == 0 {
-        return 0.0;
-    }
+/// `m` (nonzero, `n` digits, no trailing zero) × 10^`exp`, correctly
+/// rounded.
+fn small(m: u64, n: usize, exp: i64) -> f64 {
     // The value lies in [10^(lead-1), 10^lead).
-    let lead = n + exp;
+    let lead = n as i64 + exp;
     if lead > 310 {
         return f64::INFINITY;
     }
     if lead < -323 {
         return 0.0;
     }
-    if n <= 19 && !truncated {
-        let m = digits.iter().fold(0u64, |m, &d| 10 * m + u64::from(d));
-        // Clinger's fast path: both exact, one rounding.
-        if m < 1 << 53 && (-22..=22).contains(&exp) {
-            let p = pow10_f64(exp.unsigned_abs() as usize);
-            return if exp < 0 { m as f64 / p } else { m as f64 * p };
+    // Clinger's fast path: both exact, one rounding.
+    if m < 1 << 53 && (-22..=22).contains(&exp) {
+        let p = pow10_f64(exp.unsigned_abs() as usize);
+        return if exp < 0 { m as f64 / p } else { m as f64 * p };
+    }
+    if (0..=38).contains(&exp) {
+        // m × 10^exp exact in u128 when it fits; `as` rounds to nearest.
+        if let Some(v) = (m as u128).checked_mul(10u128.pow(exp as u32)) {
+            return v as f64;
         }
-        if (0..=38).contains(&exp) {
-            // m × 10^exp exact in u128 when it fits; `as` rounds to nearest.
-            if let Some(v) = (m as u128).checked_mul(10u128.pow(exp as u32)) {
-                return v as f64;
-            }
-        } else if (-19..0).contains(&exp) {
-            // m / 10^-exp: m shifted to the top of 128 bits over a divisor
-            // below 2^64 gives a quotient of 64 bits or more; a nonzero
-            // remainder becomes a sticky low bit, below the rounding bit.
-            let p = 10u128.pow((-exp) as u32);
-            let z = m.leading_zeros() + 64;
-            let a = (m as u128) << z;
-            let q = a / p;
-            let q = q | u128::from(a % p != 0);
-            return q as f64 * pow2(-(z as i32));
+    } else if (-19..0).contains(&exp) {
+        // m / 10^-exp: m shifted to the top of 128 bits over a divisor
+        // below 2^64 gives a quotient of 64 bits or more; a nonzero
+        // remainder becomes a sticky low bit, below the rounding bit.
+        let p = 10u64.pow((-exp) as u32);
+        let z = m.leading_zeros();
+        let (q, r) = div128(m << z, p);
+        let q = q | u128::from(r != 0);
+        return q as f64 * pow2(-(z as i32) - 64);
+    }
+    let mut digits = [0u8; 20];
+    let mut k = 20;
+    let mut v = m;
+    while v > 0 {
+        k -= 1;
+        digits[k] = (v % 10) as u8;
+        v /= 10;
+    }
+    slow(&digits[k..], exp, false)
+}
+
+/// (`hi` × 2^64) / `p` and its remainder, `p` nonzero: two 128-by-64-bit
+/// steps of 32-bit digits each (Knuth's algorithm D), not a general u128
+/// division.
+fn div128(hi: u64, p: u64) -> (u128, u64) {
+    let q1 = hi / p;
+    let r1 = hi % p;
+    // (r1 × 2^64) / p, r1 < p: the quotient fits 64 bits.
+    let (q0, r0) = divlu(r1, 0, p);
+    ((u128::from(q1) << 64) | u128::from(q0), r0)
+}
+
+/// (`u1` × 2^64 + `u0`) / `v` with `u1` < `v`: quotient and remainder
+/// (Hacker's Delight, divlu).
+fn divlu(u1: u64, u0: u64, v: u64) -> (u64, u64) {
+    const B: u64 = 1 << 32;
+    let s = v.leading_zeros();
+    let v = v << s;
+    let (vn1, vn0) = (v >> 32, v & (B - 1));
+    let un32 = if s == 0 { u1 } else { (u1 << s) | (u0 >> (64 - s)) };
+    let un10 = u0 << s;
+    let (un1, un0) = (un10 >> 32, un10 & (B - 1));
+    let mut q1 = un32 / vn1;
+    let mut rhat = un32 - q1 * vn1;
+    while q1 >= B || q1 * vn0 > B * rhat + un1 {
+        q1 -= 1;
+        rhat += vn1;
+        if rhat >= B {
+            break;
         }
     }
-    slow(digits, exp, truncated)
+    let un21 = un32.wrapping_mul(B).wrapping_add(un1).wrapping_sub(q1.wrapping_mul(v));
+    let mut q0 = un21 / vn1;
+    rhat = un21 - q0 * vn1;
+    while q0 >= B || q0 * vn0 > B * rhat + un0 {
+        q0 -= 1;
+        rhat += vn1;
+        if rhat >= B {
+            break;
+        }
+    }
+    let r = (un21.wrapping_mul(B).wrapping_add(un0).wrapping_sub(q0.wrapping_mul(v))) >> s;
+    (q1 * B + q0, r)
 }
 
 /// 2^e as an `f64`, for e in the normal range.
@@ -489,6 +586,17 @@ mod tests {
             s
         } else {
             format!("{s}e{e}")
+        }
+    }
+
+    #[test]
+    fn div128_is_u128_division() {
+        let mut rng = Rng(7);
+        for i in 0..1_000_000u64 {
+            let hi = rng.next() >> (i % 64);
+            let p = (rng.next() >> (rng.below(64))).max(1);
+            let a = u128::from(hi) << 64;
+            assert_eq!(super::div128(hi, p), (a / u128::from(p), (a % u128::from(p)) as u64), "{hi} {p}");
         }
     }
 

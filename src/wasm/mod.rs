@@ -18,6 +18,12 @@
 
 pub mod interop;
 
+/// The core module's allocator (feature `talc-alloc`): talc, smaller than
+/// std's dlmalloc. wasm32 here is single-threaded (no atomics).
+#[cfg(feature = "talc-alloc")]
+#[global_allocator]
+static ALLOC: talc::wasm::WasmDynamicTalc = talc::wasm::new_wasm_dynamic_allocator();
+
 #[cfg(feature = "wasm-audit")]
 pub mod audit;
 #[cfg(feature = "wasm-core")]
