@@ -58,6 +58,7 @@ use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 pub use crate::model::{has_signature, Model};
 use crate::sample::{range_of, Sample};
+use navguard_logs::decimal::Shortest;
 use crate::dragend::DragEnd;
 use crate::track::VelocityTrack;
 
@@ -2043,7 +2044,7 @@ impl Detector {
                 return Err(InputError {
                     row,
                     field: "t",
-                    reason: format!("time goes backwards: {} after {}", s.t, lt),
+                    reason: format!("time goes backwards: {} after {}", Shortest(s.t), Shortest(lt)),
                 });
             }
         }

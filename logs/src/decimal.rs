@@ -453,6 +453,347 @@ impl Big {
     }
 }
 
+/// Add to [`Big`] what printing needs.
+impl Big {
+    fn from_u64(v: u64) -> Big {
+        let mut x = Big(vec![v as u32, (v >> 32) as u32]);
+        x.trim();
+        x
+    }
+
+    fn is_zero(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// self + other.
+    fn plus(&self, other: &Big) -> Big {
+        let n = self.0.len().max(other.0.len());
+        let mut out = Vec::with_capacity(n + 1);
+        let mut carry = 0u64;
+        for i in 0..n {
+            let v = u64::from(self.0.get(i).copied().unwrap_or(0)) + u64::from(other.0.get(i).copied().unwrap_or(0)) + carry;
+            out.push(v as u32);
+            carry = v >> 32;
+        }
+        if carry != 0 {
+            out.push(carry as u32);
+        }
+        Big(out)
+    }
+
+    /// self /= d (d nonzero), rounding down.
+    fn div_small(&mut self, d: u32) {
+        let mut rem = 0u64;
+        for l in self.0.iter_mut().rev() {
+            let v = (rem << 32) | u64::from(*l);
+            *l = (v / u64::from(d)) as u32;
+            rem = v % u64::from(d);
+        }
+        self.trim();
+    }
+
+    /// The next digit: self / scale (below 10), self keeping the remainder.
+    fn digit(&mut self, scale: &Big) -> u8 {
+        let mut d = 0;
+        while self.cmp(scale) != Ordering::Less {
+            self.sub(scale);
+            d += 1;
+        }
+        d
+    }
+}
+
+// Printing: `{}`, `{:e}` and `{:.N}` of an f64, the same text as std's
+// (std's own exact algorithm, Dragon4, ported from core::num::flt2dec over
+// the `Big` above), without std's float-printing code and tables in the
+// core wasm module: about 10 KB there for a few messages and metadata
+// values. The tests hold every form to std's over random and crafted
+// doubles.
+
+/// std's `Decoded`: the value is `mant` × 2^`exp`; the rounding interval
+/// reaches `minus` below and `plus` above (same scale), its ends included
+/// when `inclusive`.
+struct Decoded {
+    mant: u64,
+    minus: u64,
+    plus: u64,
+    exp: i32,
+    inclusive: bool,
+}
+
+/// A finite nonzero `x` decoded as std decodes it (`flt2dec::decode`).
+fn decode(x: f64) -> Decoded {
+    let bits = x.to_bits();
+    let biased = ((bits >> 52) & 0x7ff) as i32;
+    let frac = bits & ((1 << 52) - 1);
+    let (mant, exp) = if biased == 0 { (frac << 1, -1075) } else { (frac | (1 << 52), biased - 1075) };
+    let inclusive = mant & 1 == 0;
+    if biased == 0 {
+        Decoded { mant, minus: 1, plus: 1, exp, inclusive }
+    } else if mant == 1 << 52 {
+        Decoded { mant: mant << 2, minus: 1, plus: 2, exp: exp - 2, inclusive }
+    } else {
+        Decoded { mant: mant << 1, minus: 1, plus: 1, exp: exp - 1, inclusive }
+    }
+}
+
+/// std's `estimate_scaling_factor`.
+fn estimate_k(mant: u64, exp: i32) -> i32 {
+    let nbits = 64 - (mant - 1).leading_zeros() as i64;
+    (((nbits + i64::from(exp)) * 1_292_913_986) >> 32) as i32
+}
+
+/// std's `round_up` on decimal digits (ASCII).
+fn round_up(d: &mut [u8]) -> Option<u8> {
+    match d.iter().rposition(|&c| c != b'9') {
+        Some(i) => {
+            d[i] += 1;
+            d[i + 1..].iter_mut().for_each(|c| *c = b'0');
+            None
+        }
+        None if d.is_empty() => Some(b'1'),
+        None => {
+            d[0] = b'1';
+            d[1..].iter_mut().for_each(|c| *c = b'0');
+            Some(b'0')
+        }
+    }
+}
+
+/// `mant` × 2^`exp` as (mant, scale) Bigs, the power of two on one side.
+fn scaled(mant: u64, exp: i32) -> (Big, Big) {
+    let (mut m, mut s) = (Big::from_u64(mant), Big(vec![1]));
+    if exp < 0 {
+        s = s.shl((-exp) as usize);
+    } else {
+        m = m.shl(exp as usize);
+    }
+    (m, s)
+}
+
+/// Dragon4's shortest digits (std's `dragon::format_shortest`): the
+/// digits and the decimal exponent k (value = 0.d1d2... × 10^k).
+fn shortest(d: &Decoded) -> (Vec<u8>, i32) {
+    let rounding = if d.inclusive { Ordering::Greater } else { Ordering::Equal };
+    let mut k = estimate_k(d.mant + d.plus, d.exp);
+    let (mut mant, mut scale) = scaled(d.mant, d.exp);
+    let (mut minus, _) = scaled(d.minus, d.exp.max(0));
+    let (mut plus, _) = scaled(d.plus, d.exp.max(0));
+    if k >= 0 {
+        scale.mul_pow10(k as usize);
+    } else {
+        for b in [&mut mant, &mut minus, &mut plus] {
+            b.mul_pow10((-k) as usize);
+        }
+    }
+    if scale.cmp(&mant.plus(&plus)) < rounding {
+        k += 1;
+    } else {
+        for b in [&mut mant, &mut minus, &mut plus] {
+            b.mul_add(10, 0);
+        }
+    }
+    let mut buf = Vec::new();
+    let (mut down, mut up);
+    loop {
+        buf.push(b'0' + mant.digit(&scale));
+        down = mant.cmp(&minus) < rounding;
+        up = scale.cmp(&mant.plus(&plus)) < rounding;
+        if down || up {
+            break;
+        }
+        for b in [&mut mant, &mut minus, &mut plus] {
+            b.mul_add(10, 0);
+        }
+    }
+    if up && (!down || mant.shl(1).cmp(&scale) != Ordering::Less) {
+        if let Some(c) = round_up(&mut buf) {
+            buf.push(c);
+            k += 1;
+        }
+    }
+    (buf, k)
+}
+
+/// Dragon4's exact digits down to the decimal position `limit` (std's
+/// `dragon::format_exact` with a buffer of `maxlen`).
+fn exact(d: &Decoded, maxlen: usize, limit: i32) -> (Vec<u8>, i32) {
+    let mut k = estimate_k(d.mant, d.exp);
+    let (mut mant, mut scale) = scaled(d.mant, d.exp);
+    if k >= 0 {
+        scale.mul_pow10(k as usize);
+    } else {
+        mant.mul_pow10((-k) as usize);
+    }
+    // scale / (2 × 10^maxlen), rounded down step by step as std's does
+    let mut half = Big(scale.0.clone());
+    let mut n = maxlen;
+    while n > 9 {
+        half.div_small(1_000_000_000);
+        n -= 9;
+    }
+    half.div_small(10u32.pow(n as u32) << 1);
+    if half.plus(&mant).cmp(&scale) != Ordering::Less {
+        k += 1;
+    } else {
+        mant.mul_add(10, 0);
+    }
+    let mut len = if k < limit {
+        0
+    } else if ((k - limit) as usize) < maxlen {
+        (k - limit) as usize
+    } else {
+        maxlen
+    };
+    let mut buf = Vec::with_capacity(len + 1);
+    for _ in 0..len {
+        if mant.is_zero() {
+            buf.resize(len, b'0');
+            return (buf, k);
+        }
+        buf.push(b'0' + mant.digit(&scale));
+        mant.mul_add(10, 0);
+    }
+    scale.mul_add(5, 0);
+    let order = mant.cmp(&scale);
+    if order == Ordering::Greater || (order == Ordering::Equal && len > 0 && buf[len - 1] & 1 == 1) {
+        if let Some(c) = round_up(&mut buf) {
+            k += 1;
+            if k > limit && len < maxlen {
+                buf.push(c);
+                len += 1;
+            }
+        }
+    }
+    buf.truncate(len);
+    (buf, k)
+}
+
+/// std's `digits_to_dec_str`.
+fn dec_str(out: &mut String, buf: &[u8], exp: i32, frac_digits: usize) {
+    let zeros = |out: &mut String, n: usize| out.extend(core::iter::repeat_n('0', n));
+    let text = |out: &mut String, b: &[u8]| b.iter().for_each(|&c| out.push(char::from(c)));
+    if exp <= 0 {
+        let minus_exp = (-exp) as usize;
+        out.push_str("0.");
+        zeros(out, minus_exp);
+        text(out, buf);
+        if frac_digits > buf.len() && frac_digits - buf.len() > minus_exp {
+            zeros(out, frac_digits - buf.len() - minus_exp);
+        }
+    } else {
+        let exp = exp as usize;
+        if exp < buf.len() {
+            text(out, &buf[..exp]);
+            out.push('.');
+            text(out, &buf[exp..]);
+            if frac_digits > buf.len() - exp {
+                zeros(out, frac_digits - (buf.len() - exp));
+            }
+        } else {
+            text(out, buf);
+            zeros(out, exp - buf.len());
+            if frac_digits > 0 {
+                out.push('.');
+                zeros(out, frac_digits);
+            }
+        }
+    }
+}
+
+/// The sign, and NaN, infinities and zeros as std writes them; `None` for
+/// a finite nonzero value (what is left to write).
+fn special(out: &mut String, x: f64, zero: &str) -> Option<()> {
+    if x.is_nan() {
+        out.push_str("NaN");
+        return Some(());
+    }
+    if x.is_sign_negative() {
+        out.push('-');
+    }
+    if x.is_infinite() {
+        out.push_str("inf");
+        return Some(());
+    }
+    if x == 0.0 {
+        out.push_str(zero);
+        return Some(());
+    }
+    None
+}
+
+/// `{}` of an `f64`, as std writes it (the shortest digits that read back
+/// as the same value, no exponent).
+pub struct Shortest(pub f64);
+
+impl core::fmt::Display for Shortest {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let mut out = String::new();
+        if special(&mut out, self.0, "0").is_none() {
+            let (buf, k) = shortest(&decode(self.0));
+            dec_str(&mut out, &buf, k, 0);
+        }
+        f.write_str(&out)
+    }
+}
+
+/// `{:e}` of an `f64`, as std writes it (the shortest digits, `1.5e-7`).
+pub struct Sci(pub f64);
+
+impl core::fmt::Display for Sci {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let mut out = String::new();
+        if special(&mut out, self.0, "0e0").is_none() {
+            let (buf, k) = shortest(&decode(self.0));
+            out.push(char::from(buf[0]));
+            if buf.len() > 1 {
+                out.push('.');
+                buf[1..].iter().for_each(|&c| out.push(char::from(c)));
+            }
+            out.push('e');
+            out.push_str(&(k - 1).to_string());
+        }
+        f.write_str(&out)
+    }
+}
+
+/// `{:.N}` of an `f64` (N = `.1`), as std writes it (exact digits rounded
+/// half to even at the N-th decimal).
+pub struct Fixed(pub f64, pub usize);
+
+impl core::fmt::Display for Fixed {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let (x, frac_digits) = (self.0, self.1);
+        let mut out = String::new();
+        let zero = |out: &mut String| {
+            out.push('0');
+            if frac_digits > 0 {
+                out.push('.');
+                out.extend(core::iter::repeat_n('0', frac_digits));
+            }
+        };
+        let mut sign = String::new();
+        if special(&mut sign, x, "").is_some() {
+            out.push_str(&sign);
+            if x == 0.0 {
+                zero(&mut out);
+            }
+        } else {
+            out.push_str(&sign);
+            let d = decode(x);
+            let maxlen = 21 + ((if d.exp < 0 { -12 } else { 5 } * d.exp) as usize >> 4);
+            let limit = if frac_digits < 0x8000 { -(frac_digits as i32) } else { i32::from(i16::MIN) };
+            let (buf, k) = exact(&d, maxlen, limit);
+            if k <= limit {
+                zero(&mut out);
+            } else {
+                dec_str(&mut out, &buf, k, frac_digits);
+            }
+        }
+        f.write_str(&out)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::parse_f64;
@@ -616,5 +957,38 @@ mod tests {
             accepted += usize::from(same(&s));
         }
         assert!(accepted > 300_000, "{accepted}");
+    }
+
+    /// Every form we print, against std's.
+    fn same_text(x: f64) {
+        use super::{Fixed, Sci, Shortest};
+        assert_eq!(Shortest(x).to_string(), format!("{x}"), "{{}} of {:e} ({:#x})", x, x.to_bits());
+        assert_eq!(Sci(x).to_string(), format!("{x:e}"), "{{:e}} of {x:e}");
+        for p in [0, 1, 2, 3, 4, 6, 9, 17, 30] {
+            assert_eq!(Fixed(x, p).to_string(), format!("{x:.p$}"), "{{:.{p}}} of {x:e} ({:#x})", x.to_bits());
+        }
+    }
+
+    #[test]
+    fn printing_matches_std() {
+        for x in [0.0, -0.0, 1.0, -1.0, 0.5, 1.5, 2.5, -2.5, 0.25, 0.35, 0.125, 9.5, 99.95, 0.1, 0.2, 0.3, 1e21, 1e22, 1e23, 1e-7, 123.456,
+            f64::NAN, -f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MAX, f64::MIN, f64::MIN_POSITIVE, -f64::MIN_POSITIVE,
+            f64::from_bits(1), f64::from_bits(2), f64::from_bits(0x000f_ffff_ffff_ffff), f64::EPSILON, 5e-324, 0.0049999, 0.0005, 0.00051,
+            1234.5, 0.9999999, 9.9999999e9, 47.3977419, 8.5, 257.926, 0.0045, 0.015] {
+            same_text(x);
+        }
+        let mut rng = Rng(0x5eed);
+        for i in 0..60_000 {
+            let x = match i % 5 {
+                0 => f64::from_bits(rng.next()),
+                // powers of two: the asymmetric interval
+                1 => f64::from_bits(rng.below(2046) << 52) * if rng.below(2) == 0 { 1.0 } else { -1.0 },
+                2 => (rng.below(2_000_000) as f64 - 1e6) * 10f64.powi(rng.below(12) as i32 - 8),
+                3 => f64::from_bits(rng.below(1 << 53)),
+                // exact ties at a few decimals
+                _ => (rng.below(100_000) as f64 + 0.5) / 10f64.powi(rng.below(4) as i32),
+            };
+            same_text(x);
+        }
     }
 }

@@ -60,6 +60,7 @@ use std::rc::Rc;
 
 use super::extras::{EphSource, Extras};
 use super::{LogData, LogError, LogSummary, NoRows, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
+use crate::decimal::{Fixed, Shortest};
 use crate::sample::Sample;
 
 /// First 7 header bytes of every ULog file ("ULog" + 0x01 0x12 0x35).
@@ -1189,7 +1190,7 @@ impl Parser {
                 let n = val(Some(*loc), d);
                 if n.is_finite() {
                     let name = NAV_STATES.get(n as usize).filter(|s| n >= 0.0 && !s.is_empty());
-                    self.extras.mode(t, name.map_or_else(|| format!("nav_state {n}"), |s| (*s).to_string()));
+                    self.extras.mode(t, name.map_or_else(|| format!("nav_state {}", Shortest(n)), |s| (*s).to_string()));
                 }
             }
         }
@@ -1327,7 +1328,7 @@ impl Parser {
         truncate_utf8(&mut text, MAX_INFO_BYTES);
         self.log_lines.push((
             "log".to_string(),
-            format!("t={t:.3}s {name}: {text}"),
+            format!("t={}s {name}: {text}", Fixed(t, 3)),
         ));
     }
 
@@ -1345,7 +1346,7 @@ impl Parser {
         } else {
             0.0
         };
-        meta.push(("duration_s".to_string(), format!("{duration:.3}")));
+        meta.push(("duration_s".to_string(), Fixed(duration, 3).to_string()));
         meta.append(&mut self.info);
         if !self.multi_info_keys.is_empty() {
             meta.push((
@@ -1400,9 +1401,9 @@ impl Parser {
 
         if self.dropouts > 0 {
             warnings.push(format!(
-                "{} logging dropouts, {:.3} s of data lost in total",
+                "{} logging dropouts, {} s of data lost in total",
                 self.dropouts,
-                self.dropout_ms as f64 * 1e-3
+                Fixed(self.dropout_ms as f64 * 1e-3, 3)
             ));
         }
         let counted = [
@@ -1469,7 +1470,7 @@ fn key_value(p: &[u8]) -> Option<(&str, String)> {
             if v.is_nan() && !b.is_float() {
                 return None; // value bytes missing
             }
-            v.to_string()
+            Shortest(v).to_string()
         }
     };
     Some((name, text))

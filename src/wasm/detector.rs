@@ -7,6 +7,7 @@ use wasm_bindgen::prelude::*;
 use super::interop::{self as js_in, err, set, stats_object, Obj, MAX_BYTES};
 use crate::config::Config;
 use crate::detector::{row_from_values, rows_from_columns, Detector as CoreDetector, Output, OutputColumns};
+use crate::logs::decimal::Shortest;
 use crate::sample::{Sample, COLUMNS};
 
 thread_local! {
@@ -257,7 +258,7 @@ impl Detector {
                     Some(e) => err(format!("{e} (batch index {j})")),
                     None => {
                         let t = self.rows.get(k).map_or(f64::NAN, |s| s.t);
-                        err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, t, last_t))
+                        err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, Shortest(t), Shortest(last_t)))
                     }
                 });
             }
