@@ -45,6 +45,7 @@
 //! `Withheld` groups (episode start and end, gating), and `Learning` (the
 //! ANFIS and its databases).
 
+use crate::MinMax;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -532,7 +533,7 @@ impl ReceiverQuality {
         if self.scale(eph) >= QUALITY_DEGRADED && f64::from(self.learnt) * QUALITY_ALPHA >= 1.0 {
             return;
         }
-        let w = QUALITY_ALPHA.max(1.0 / (f64::from(self.learnt) + 1.0));
+        let w = QUALITY_ALPHA.fmax(1.0 / (f64::from(self.learnt) + 1.0));
         self.ln_eph = Some(l + w * (x - l));
         self.learnt = self.learnt.saturating_add(1);
     }
@@ -620,7 +621,7 @@ impl Clock {
         if reports_no_fix && t - lf > 0.5 * self.gps_dt {
             return true;
         }
-        let auto = SILENT_OUTAGE_S.max(3.0 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
+        let auto = SILENT_OUTAGE_S.fmax(3.0 * self.gps_dt).fmax(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
         flying && t - lf > timeout.unwrap_or(auto)
     }
 }
@@ -647,10 +648,10 @@ impl ImuNoise {
             let dt = t - tp;
             if dt > 0.0 && dt < 0.5 {
                 let ms = (0..3).map(|a| (f[a] - fp[a]).powi(2)).sum::<f64>() / 6.0;
-                self.psd += (dt / IMU_PSD_TAU).min(1.0) * (ms * dt - self.psd);
+                self.psd += (dt / IMU_PSD_TAU).fmin(1.0) * (ms * dt - self.psd);
                 // A dropped stretch of records is not the logging rate.
                 if dt <= IMU_MAX_PERIOD_S * 6.0 {
-                    self.period = if self.period > 0.0 { self.period + (dt / IMU_PERIOD_TAU_S).min(1.0) * (dt - self.period) } else { dt };
+                    self.period = if self.period > 0.0 { self.period + (dt / IMU_PERIOD_TAU_S).fmin(1.0) * (dt - self.period) } else { dt };
                 }
             }
         }
@@ -1033,7 +1034,7 @@ impl ReceiverClock {
             return None;
         }
         let b = sxy / sxx;
-        let sse = (syy - b * sxy).max(0.0);
+        let sse = (syy - b * sxy).fmax(0.0);
         Some((b, libm::sqrt(sse / dof as f64 / sxx) * t_over_z(RECEIVER_Z, dof as f64)))
     }
 
@@ -1171,7 +1172,7 @@ impl Consistency {
         };
         let floor = if epv.is_finite() { epv } else { 0.0 };
         let zs = |(now, prev, s): (f64, f64, f64)| {
-            let s = s.max(floor);
+            let s = s.fmax(floor);
             (now / s, prev / s)
         };
         let ((bn, bp), (zn, zp)) = (zs(b), zs(z));
@@ -1183,7 +1184,7 @@ impl Consistency {
             self.track.rebase_axis(2);
             return (0.0, true);
         }
-        (if bn * zn > 0.0 { bn.abs().min(zn.abs()) } else { 0.0 }, false)
+        (if bn * zn > 0.0 { bn.abs().fmin(zn.abs()) } else { 0.0 }, false)
     }
 
     /// A position episode's jump confirmed, over the seconds after it, as
@@ -1202,6 +1203,8 @@ impl Consistency {
     /// on a horizontal jump off the velocity track arms the drag-off's end
     /// confirmation (see `dragend`); an episode that ended, or re-anchored,
     /// disarms it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn arm_drag_end(&mut self, t: f64, opened_on_position: bool, step: &EpisodeStep) {
         if !step.fault || step.reset {
             self.drag_end.disarm();
@@ -1316,8 +1319,8 @@ impl Consistency {
         // (NaN, not judged, unless both are); and its drift over a long
         // window, against both (see `drift`).
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
-        let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
-        out.fold(2, dep.max(drift * DRIFT_R_SCALE));
+        let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
+        out.fold(2, dep.fmax(drift * DRIFT_R_SCALE));
         // The GPS altitude off both other vertical references the same way:
         // the baro (its level against the GPS altitude) and the GPS's own
         // vertical velocity integrated (the track's down axis). Two of three
@@ -1361,7 +1364,7 @@ impl Methods {
     /// A baro sample's innovation (ν m, S m²): the epoch keeps its largest
     /// normalised one.
     fn note_baro(&mut self, nu: f64, s: f64) {
-        let g = |(nu, s): (f64, f64)| nu.abs() / s.max(1e-12).sqrt();
+        let g = |(nu, s): (f64, f64)| nu.abs() / s.fmax(1e-12).sqrt();
         if self.baro_inn.is_none_or(|b| g((nu, s)) > g(b)) {
             self.baro_inn = Some((nu, s));
         }
@@ -1482,6 +1485,8 @@ impl Withheld {
 
     /// Feed every group again (normal verdict, re-anchoring, data gap). The
     /// baro's calm count restarts at the next baro sample that is fed.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn release(&mut self) {
         self.groups = [false; GROUPS];
     }
@@ -1494,6 +1499,8 @@ impl Withheld {
     /// ramp) keeps aiding it, which keeps the coast drift, and so the
     /// departure's normalisation, small. GPS position and velocity come from
     /// one receiver, so each can take the other with it (below).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn withhold(&mut self, ev: &Evidence) {
         for g in 0..GROUPS {
             self.groups[g] |= ev.departed(g);
@@ -1627,6 +1634,8 @@ fn undoes(jump: &[f64; 3], off: &[f64; 3], min2: f64) -> bool {
 
 impl Episode {
     /// A row without a fix declared an outage.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn outage(&mut self, last_fix: Option<f64>) {
         self.active = true;
         self.imu = false;
@@ -1640,6 +1649,8 @@ impl Episode {
     /// The episode stage, first half: a fault verdict opens an episode (or
     /// continues one), an IMU episode ends once the IMU is calm again, and a
     /// normal verdict closes it. Returns whether the epoch stays a fault.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn open(&mut self, fault: bool, ind: &mut IndicatorEngine, oracle: bool) -> bool {
         let mut fault = fault;
         if fault {
@@ -1706,7 +1717,7 @@ impl Episode {
         if self.receiver_lost {
             max_coast
         } else {
-            max_coast.max(POSITION_COAST_S)
+            max_coast.fmax(POSITION_COAST_S)
         }
     }
 
@@ -1783,6 +1794,7 @@ impl Episode {
 
     /// The filter was re-anchored on GPS: nothing coasts any more.
     #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn reanchored(&mut self) {
         self.coast_start = None;
         self.calm_epochs = 0;
@@ -1815,6 +1827,7 @@ struct Learning {
 
 impl Learning {
     #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn new(model: &Model, q: usize) -> Self {
         Learning {
             anfis: model.anfis.clone(),
@@ -2135,6 +2148,7 @@ impl Detector {
     /// Every sensor stopped: a logging gap, not a navigation fault. No
     /// verdict carries across it: it starts from "no GPS yet".
     #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn data_gap(&mut self) {
         self.stats.data_gaps += 1;
         self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
@@ -2204,6 +2218,7 @@ impl Detector {
     }
 
     #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn filter_failed(&mut self, _e: FilterError) {
         // Re-initialise at the next fix; keep the verdict history.
         self.stats.filter_errors += 1;
@@ -2256,6 +2271,7 @@ impl Detector {
     /// The first fix, or the first after a data gap or a filter error,
     /// starts the filter on it.
     #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn start_filter(&mut self, fix: &Fix) {
         let noise = self.cfg.filter_noise();
         let v0 = fix.vel.unwrap_or_else(Vector3::zeros);
@@ -2390,6 +2406,7 @@ impl Detector {
 
     /// The filter was re-anchored on GPS: every reference restarts.
     #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn reanchored(&mut self) {
         self.stats.filter_resets += 1;
         self.episode.reanchored();

@@ -139,6 +139,7 @@
 //! leaves), re-summed exactly once per window length to shed rounding, so the
 //! per-epoch cost is O(1) in `w`.
 
+use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
 /// Residual groups: GPS position, GPS velocity, barometer.
@@ -293,7 +294,7 @@ impl Indicators {
     pub fn fold(&mut self, g: usize, x: f64) {
         if x.is_finite() && self.r_group[g].is_finite() && x > self.r_group[g] {
             self.r_group[g] = x;
-            self.r = self.r.max(x);
+            self.r = self.r.fmax(x);
         }
     }
 }
@@ -326,7 +327,7 @@ const PRIOR_EPOCHS: f64 = 4.0;
 /// from `learnt` samples: a running mean over the prior (`PRIOR_EPOCHS`)
 /// and the samples until it reaches the forgetting factor `alpha`.
 fn fast_start_weight(alpha: f64, learnt: u32) -> f64 {
-    alpha.max(1.0 / (f64::from(learnt) + PRIOR_EPOCHS))
+    alpha.fmax(1.0 / (f64::from(learnt) + PRIOR_EPOCHS))
 }
 
 impl AxisState {
@@ -348,7 +349,7 @@ impl AxisState {
             return;
         }
         let lim = 16.0 * sigma * sigma;
-        self.ms += self.learn_weight(alpha) * ((e * e).min(lim) - self.ms);
+        self.ms += self.learn_weight(alpha) * ((e * e).fmin(lim) - self.ms);
         self.learnt = self.learnt.saturating_add(1);
     }
 }
@@ -482,7 +483,7 @@ impl PvTest {
         self.stat = f64::NAN;
     }
     fn sigma(&self, a: usize) -> f64 {
-        self.ms[a].sqrt().max(PV_FLOOR)
+        self.ms[a].sqrt().fmax(PV_FLOOR)
     }
     /// Record one epoch's raw mismatch for the incoherence measure only.
     fn note(&mut self, u: [f64; 3]) {
@@ -490,7 +491,7 @@ impl PvTest {
             self.inc_len = 0;
             return;
         }
-        let z2 = (0..3).map(|a| (u[a] * u[a] / self.ms_u[a].max(PV_U_FLOOR * PV_U_FLOOR)).min(1e6)).sum::<f64>() / 3.0;
+        let z2 = (0..3).map(|a| (u[a] * u[a] / self.ms_u[a].fmax(PV_U_FLOOR * PV_U_FLOOR)).fmin(1e6)).sum::<f64>() / 3.0;
         self.inc[self.inc_head] = z2;
         self.inc_head = (self.inc_head + 1) % self.inc_cap;
         self.inc_len = (self.inc_len + 1).min(self.inc_cap);
@@ -502,7 +503,7 @@ impl PvTest {
         if self.inc_len == 0 {
             return f64::NAN;
         }
-        self.inc[..self.inc_len].iter().fold(f64::INFINITY, |m, &z| m.min(z)).sqrt()
+        self.inc[..self.inc_len].iter().fold(f64::INFINITY, |m, &z| m.fmin(z)).sqrt()
     }
     fn push(&mut self, u: [f64; 3]) {
         if !u.iter().all(|v| v.is_finite()) {
@@ -511,7 +512,7 @@ impl PvTest {
         }
         self.last_u = u;
         let u: [f64; 3] = core::array::from_fn(|a| {
-            let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
+            let lim = PV_CLIP * self.ms_u[a].sqrt().fmax(PV_U_FLOOR);
             u[a].clamp(-lim, lim)
         });
         let cap = self.ring.len();
@@ -557,8 +558,8 @@ impl PvTest {
         let w_u = fast_start_weight(PV_ALPHA_U, self.learnt_u);
         self.learnt_u = self.learnt_u.saturating_add(1);
         for a in 0..3 {
-            let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
-            let x = (self.last_u[a] * self.last_u[a]).min(lim * lim);
+            let lim = PV_CLIP * self.ms_u[a].sqrt().fmax(PV_U_FLOOR);
+            let x = (self.last_u[a] * self.last_u[a]).fmin(lim * lim);
             self.ms_u[a] += w_u * (x - self.ms_u[a]);
         }
         if self.len < self.ring.len() {
@@ -571,7 +572,7 @@ impl PvTest {
         for a in 0..3 {
             let sg = self.sigma(a);
             // Winsorised at 3σ.
-            let x = (self.sum[a] * self.sum[a]).min(9.0 * sg * sg);
+            let x = (self.sum[a] * self.sum[a]).fmin(9.0 * sg * sg);
             self.ms[a] += w_s * (x - self.ms[a]);
         }
     }
@@ -678,7 +679,7 @@ impl<const D: usize> LagTest<D> {
     }
 
     fn sigma(&self, a: usize) -> f64 {
-        self.ms[a].sqrt().max(self.floor)
+        self.ms[a].sqrt().fmax(self.floor)
     }
 
     fn oldest(&self) -> (f64, [f64; D]) {
@@ -735,7 +736,7 @@ impl<const D: usize> LagTest<D> {
             return f64::NAN;
         }
         self.last_t = t;
-        let scale = (dt / self.span).max(1.0).sqrt();
+        let scale = (dt / self.span).fmax(1.0).sqrt();
         let mut z2 = 0.0;
         for a in 0..D {
             let s = z[a] - z0[a] - self.rate[a] * dt;
@@ -759,12 +760,12 @@ impl<const D: usize> LagTest<D> {
         };
         self.t_rate = self.last_t;
         self.learnt = self.learnt.saturating_add(1);
-        let alpha = if self.fast_start { self.alpha.max(1.0 / self.learnt as f64) } else { self.alpha };
+        let alpha = if self.fast_start { self.alpha.fmax(1.0 / self.learnt as f64) } else { self.alpha };
         for a in 0..D {
             let s = self.last_s[a];
             if s.is_finite() {
                 let sg = self.sigma(a);
-                self.ms[a] += alpha * ((s * s).min(9.0 * sg * sg) - self.ms[a]);
+                self.ms[a] += alpha * ((s * s).fmin(9.0 * sg * sg) - self.ms[a]);
                 // Baseline: the remaining mean rate, winsorised like σ.
                 let lim = 3.0 * sg;
                 self.rate[a] += k * s.clamp(-lim, lim) / self.last_dt;
@@ -883,7 +884,7 @@ impl IndicatorEngine {
     /// σ_Δ currently used for an axis.
     pub fn sigma(&self, axis: usize) -> f64 {
         let g = group_of(axis);
-        self.axes.get(axis).map_or(f64::NAN, |a| a.ms.sqrt().max(self.set.floor[g]))
+        self.axes.get(axis).map_or(f64::NAN, |a| a.ms.sqrt().fmax(self.set.floor[g]))
     }
 
     /// Record one axis' residual `r` (innovation), its predicted change `m`
@@ -902,9 +903,9 @@ impl IndicatorEngine {
             a.has_ref = true;
         }
         if p_prior.is_finite() {
-            a.p_peak = a.p_peak.max(p_prior);
+            a.p_peak = a.p_peak.fmax(p_prior);
         }
-        let var = sigma * sigma + (a.p_peak - a.p_ref).max(0.0);
+        let var = sigma * sigma + (a.p_peak - a.p_ref).fmax(0.0);
         let d = (r - a.r_ref) / var.sqrt();
         let base = g * K;
         self.pending[base] += d * d;
@@ -998,7 +999,7 @@ impl IndicatorEngine {
         self.baro.set_hold(held);
         let st = self.baro.push(t, [z]);
         if st.is_finite() {
-            self.baro_pending = if self.baro_pending.is_finite() { self.baro_pending.max(st) } else { st };
+            self.baro_pending = if self.baro_pending.is_finite() { self.baro_pending.fmax(st) } else { st };
         }
         st
     }
@@ -1033,7 +1034,7 @@ impl IndicatorEngine {
     pub fn observe_imu(&mut self, t: f64, z: [f64; 2]) {
         let st = self.imu.push(t, z);
         if st.is_finite() {
-            self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.max(st) } else { st };
+            self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.fmax(st) } else { st };
         }
     }
 
@@ -1130,31 +1131,31 @@ impl IndicatorEngine {
         for g in 0..GROUPS {
             let b = g * K;
             if lt[b + 1] > 0.5 && st[b + 1] > 0.5 {
-                let rl = (lt[b].max(0.0) / lt[b + 1]).sqrt();
-                let rs = (st[b].max(0.0) / st[b + 1]).sqrt();
-                let mut rg = rl.min(rs);
+                let rl = (lt[b].fmax(0.0) / lt[b + 1]).sqrt();
+                let rs = (st[b].fmax(0.0) / st[b + 1]).sqrt();
+                let mut rg = rl.fmin(rs);
                 if g == 0 && pv.is_finite() {
-                    rg = rg.max(pv);
+                    rg = rg.fmax(pv);
                 }
                 if g == 2 && baro.is_finite() {
-                    rg = rg.max(baro);
+                    rg = rg.fmax(baro);
                 }
                 // Condemn the baro only if it also left the GPS altitude:
                 // one that follows the GPS altitude while the filter's
                 // height drifts, or through a GPS vertical fault, is fine.
                 if g == 2 && baro_gps.is_finite() {
-                    rg = rg.min(baro_gps.max(1.0));
+                    rg = rg.fmin(baro_gps.fmax(1.0));
                 }
-                unfolded = unfolded.max(rg);
+                unfolded = unfolded.fmax(rg);
                 if g == 1 {
                     vel_unfolded = rg;
                 }
                 if g == 1 && self.imu_fold && imu.is_finite() {
                     out.r_imu = imu * IMU_R_SCALE;
-                    rg = rg.max(out.r_imu);
+                    rg = rg.fmax(out.r_imu);
                 }
                 out.r_group[g] = rg;
-                out.r = out.r.max(rg);
+                out.r = out.r.fmax(rg);
             }
             if st[b + 1] > 0.5 && st[b + 3] > 0.0 {
                 out.inc_group[g] = (st[b + 3] / st[b + 1]).sqrt();
@@ -1168,7 +1169,7 @@ impl IndicatorEngine {
                 let n = C_SHRINK * lt[b + 1];
                 let rho = (em / (ee * (mm + n)).sqrt()).clamp(-1.0, 1.0).abs();
                 out.c_group[g] = rho;
-                out.c = out.c.max(rho);
+                out.c = out.c.fmax(rho);
             }
         }
         self.r_unfolded = unfolded;

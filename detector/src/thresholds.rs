@@ -94,6 +94,7 @@
 //! results are bit-identical. Input errors are `Err(String)` naming the
 //! parameter and value; nothing panics on bad input.
 
+use crate::MinMax;
 use navguard_logs::decimal::{Fixed, Shortest as S};
 use serde::{Deserialize, Serialize};
 
@@ -258,7 +259,7 @@ pub fn max_window_count(residuals: &[f64], w: usize, rho: f64) -> u32 {
 pub fn normality_model(residuals: &[f64], w: usize, psi: f64) -> Result<NormalityModel, String> {
     check_residuals(residuals, w)?;
     check_psi(psi)?;
-    let chi = residuals.iter().fold(0.0f64, |m, r| m.max(libm::fabs(*r)));
+    let chi = residuals.iter().fold(0.0f64, |m, r| m.fmax(libm::fabs(*r)));
     let ratio = chi / psi;
     if ratio > MAX_REFERENCE_POINTS as f64 {
         return Err(format!(
@@ -506,7 +507,7 @@ pub struct AdaptiveThreshold {
 /// Deterministic probe faults on a copy of the training residuals; returns
 /// (probed residuals, labels).
 fn probe(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<(Vec<f64>, Vec<bool>), String> {
-    let chi = residuals.iter().fold(0.0f64, |m, r| m.max(libm::fabs(*r)));
+    let chi = residuals.iter().fold(0.0f64, |m, r| m.fmax(libm::fabs(*r)));
     let amp = cfg.probe_gain * chi;
     let mut x = residuals.to_vec();
     let mut label = vec![false; x.len()];
@@ -918,7 +919,7 @@ impl Evaluator {
     pub fn rms_threshold(&self, mode: usize) -> Option<f64> {
         match self.pool.modes.get(mode)? {
             ModeThreshold::Rt(t) if self.core.len < self.core.w => Some(t.mean_rms),
-            ModeThreshold::Rt(_) => Some(libm::sqrt(self.sumsq.max(0.0) / self.core.w as f64)),
+            ModeThreshold::Rt(_) => Some(libm::sqrt(self.sumsq.fmax(0.0) / self.core.w as f64)),
             _ => None,
         }
     }

@@ -10,14 +10,14 @@ use super::LogData;
 use crate::error::{LogError, LogPos};
 use crate::sample::{Sample, COLUMNS};
 
-/// A cell's number: std's parse, or with the feature `compact-float-parse`
+/// A cell's number: std's parse, or with the feature `compact-floats`
 /// (the core wasm module) the same results through `decimal::parse_f64`,
 /// without std's 10.4 KB table.
 #[inline]
 fn parse_f64(cell: &str) -> Option<f64> {
-    #[cfg(feature = "compact-float-parse")]
+    #[cfg(feature = "compact-floats")]
     return crate::decimal::parse_f64(cell);
-    #[cfg(not(feature = "compact-float-parse"))]
+    #[cfg(not(feature = "compact-floats"))]
     return cell.parse().ok();
 }
 

@@ -728,13 +728,21 @@ pub struct Shortest(pub f64);
 
 impl core::fmt::Display for Shortest {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let mut out = String::new();
-        if special(&mut out, self.0, "0").is_none() {
-            let (buf, k) = shortest(&decode(self.0));
-            dec_str(&mut out, &buf, k, 0);
-        }
-        f.write_str(&out)
+        #[cfg(feature = "compact-floats")]
+        return f.write_str(&shortest_text(self.0));
+        #[cfg(not(feature = "compact-floats"))]
+        return write!(f, "{}", self.0);
     }
+}
+
+/// [`Shortest`]'s text, by the port.
+pub fn shortest_text(x: f64) -> String {
+    let mut out = String::new();
+    if special(&mut out, x, "0").is_none() {
+        let (buf, k) = shortest(&decode(x));
+        dec_str(&mut out, &buf, k, 0);
+    }
+    out
 }
 
 /// `{:e}` of an `f64`, as std writes it (the shortest digits, `1.5e-7`).
@@ -742,19 +750,27 @@ pub struct Sci(pub f64);
 
 impl core::fmt::Display for Sci {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let mut out = String::new();
-        if special(&mut out, self.0, "0e0").is_none() {
-            let (buf, k) = shortest(&decode(self.0));
-            out.push(char::from(buf[0]));
-            if buf.len() > 1 {
-                out.push('.');
-                buf[1..].iter().for_each(|&c| out.push(char::from(c)));
-            }
-            out.push('e');
-            out.push_str(&(k - 1).to_string());
-        }
-        f.write_str(&out)
+        #[cfg(feature = "compact-floats")]
+        return f.write_str(&sci_text(self.0));
+        #[cfg(not(feature = "compact-floats"))]
+        return write!(f, "{:e}", self.0);
     }
+}
+
+/// [`Sci`]'s text, by the port.
+pub fn sci_text(x: f64) -> String {
+    let mut out = String::new();
+    if special(&mut out, x, "0e0").is_none() {
+        let (buf, k) = shortest(&decode(x));
+        out.push(char::from(buf[0]));
+        if buf.len() > 1 {
+            out.push('.');
+            buf[1..].iter().for_each(|&c| out.push(char::from(c)));
+        }
+        out.push('e');
+        out.push_str(&(k - 1).to_string());
+    }
+    out
 }
 
 /// `{:.N}` of an `f64` (N = `.1`), as std writes it (exact digits rounded
@@ -763,35 +779,42 @@ pub struct Fixed(pub f64, pub usize);
 
 impl core::fmt::Display for Fixed {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        let (x, frac_digits) = (self.0, self.1);
-        let mut out = String::new();
-        let zero = |out: &mut String| {
-            out.push('0');
-            if frac_digits > 0 {
-                out.push('.');
-                out.extend(core::iter::repeat_n('0', frac_digits));
-            }
-        };
-        let mut sign = String::new();
-        if special(&mut sign, x, "").is_some() {
-            out.push_str(&sign);
-            if x == 0.0 {
-                zero(&mut out);
-            }
-        } else {
-            out.push_str(&sign);
-            let d = decode(x);
-            let maxlen = 21 + ((if d.exp < 0 { -12 } else { 5 } * d.exp) as usize >> 4);
-            let limit = if frac_digits < 0x8000 { -(frac_digits as i32) } else { i32::from(i16::MIN) };
-            let (buf, k) = exact(&d, maxlen, limit);
-            if k <= limit {
-                zero(&mut out);
-            } else {
-                dec_str(&mut out, &buf, k, frac_digits);
-            }
-        }
-        f.write_str(&out)
+        #[cfg(feature = "compact-floats")]
+        return f.write_str(&fixed_text(self.0, self.1));
+        #[cfg(not(feature = "compact-floats"))]
+        return write!(f, "{:.*}", self.1, self.0);
     }
+}
+
+/// [`Fixed`]'s text, by the port.
+pub fn fixed_text(x: f64, frac_digits: usize) -> String {
+    let mut out = String::new();
+    let zero = |out: &mut String| {
+        out.push('0');
+        if frac_digits > 0 {
+            out.push('.');
+            out.extend(core::iter::repeat_n('0', frac_digits));
+        }
+    };
+    let mut sign = String::new();
+    if special(&mut sign, x, "").is_some() {
+        out.push_str(&sign);
+        if x == 0.0 {
+            zero(&mut out);
+        }
+    } else {
+        out.push_str(&sign);
+        let d = decode(x);
+        let maxlen = 21 + ((if d.exp < 0 { -12 } else { 5 } * d.exp) as usize >> 4);
+        let limit = if frac_digits < 0x8000 { -(frac_digits as i32) } else { i32::from(i16::MIN) };
+        let (buf, k) = exact(&d, maxlen, limit);
+        if k <= limit {
+            zero(&mut out);
+        } else {
+            dec_str(&mut out, &buf, k, frac_digits);
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -961,12 +984,14 @@ mod tests {
 
     /// Every form we print, against std's.
     fn same_text(x: f64) {
-        use super::{Fixed, Sci, Shortest};
-        assert_eq!(Shortest(x).to_string(), format!("{x}"), "{{}} of {:e} ({:#x})", x, x.to_bits());
-        assert_eq!(Sci(x).to_string(), format!("{x:e}"), "{{:e}} of {x:e}");
+        use super::{fixed_text, sci_text, shortest_text, Fixed, Sci, Shortest};
+        assert_eq!(shortest_text(x), format!("{x}"), "{{}} of {:e} ({:#x})", x, x.to_bits());
+        assert_eq!(sci_text(x), format!("{x:e}"), "{{:e}} of {x:e}");
         for p in [0, 1, 2, 3, 4, 6, 9, 17, 30] {
-            assert_eq!(Fixed(x, p).to_string(), format!("{x:.p$}"), "{{:.{p}}} of {x:e} ({:#x})", x.to_bits());
+            assert_eq!(fixed_text(x, p), format!("{x:.p$}"), "{{:.{p}}} of {x:e} ({:#x})", x.to_bits());
+            assert_eq!(Fixed(x, p).to_string(), format!("{x:.p$}"));
         }
+        assert_eq!((Shortest(x).to_string(), Sci(x).to_string()), (format!("{x}"), format!("{x:e}")));
     }
 
     #[test]

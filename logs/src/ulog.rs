@@ -526,7 +526,9 @@ struct Template {
     min: usize,
     full: usize,
     ts: Loc,
-    role: Role,
+    /// Shared with the subscriptions made from it: a cache hit copies a
+    /// pointer, not the maps (a deep clone was 1.9 KB of wasm).
+    role: Rc<Role>,
 }
 
 impl Defs {
@@ -569,7 +571,7 @@ impl Defs {
                 min: l.min,
                 full: l.full,
                 ts,
-                role: role_for(name, &l),
+                role: Rc::new(role_for(name, &l)),
             })
         });
         self.cached_failure |= t.is_none();
@@ -829,7 +831,7 @@ struct Sub {
     full: usize,
     /// `timestamp`, read in s (µs / 1e6).
     ts: Loc,
-    role: Role,
+    role: Rc<Role>,
 }
 
 // ---------------------------------------------------------------------------
@@ -1112,7 +1114,7 @@ impl Parser {
             return;
         }
         let Some(plan) = self.plan else {
-            match &sub.role {
+            match &*sub.role {
                 Role::Gps(GpsSrc::VehicleGpsPosition, _) => self.seen.vgp = true,
                 Role::Gps(GpsSrc::SensorGps, _) => self.seen.sensor_gps = true,
                 Role::Baro(BaroSrc::AirData, _) => self.seen.air = true,
@@ -1121,7 +1123,7 @@ impl Parser {
             }
             return;
         };
-        match &sub.role {
+        match &*sub.role {
             Role::Other => {}
             Role::Gps(src, m) => {
                 // vehicle_gps_position (the selected receiver) when it has data.
@@ -1227,7 +1229,7 @@ impl Parser {
                 self.topics.len() - 1
             }
         };
-        let role = if multi_id == 0 { tpl.role } else { Role::Other };
+        let role = if multi_id == 0 { tpl.role } else { Rc::new(Role::Other) };
         let sub = Sub {
             topic,
             min: tpl.min,
