@@ -1,14 +1,17 @@
 // The package's API, the same on every target (Node ESM and CJS, bundlers,
-// a plain <script type="module">): the wasm-bindgen bindings of the two
+// a plain <script type="module">): the wasm-bindgen bindings of the three
 // modules behind thin guards. Only the entry files differ (node.js,
 // navguard.js for browsers): they say where the .wasm bytes come from
 // (loader.js).
 //
-// Two wasm modules (see src/wasm/mod.rs): the core (detector, audits, log
-// readers, snapshots) loads on `init()` or, in Node, on first use; the lab
-// (simulators, compare, training, tightly coupled) loads only when a lab API
-// is first used: synchronously in Node, after `await loadLab()` in browsers
-// (where compiling a large module synchronously is not allowed everywhere).
+// Three wasm modules (see src/wasm/mod.rs): the core (the detector with its
+// snapshots, the log readers: what `new Detector()` plus `readLog` need)
+// loads on `init()` or, in Node, on first use. The audit module (auditBytes,
+// Auditor, StreamAuditor, metrics, with its own detector and readers) and
+// the lab (simulators, compare, training, tightly coupled) load only when
+// one of their APIs is first used: synchronously in Node, after
+// `await loadAudit()` / `await loadLab()` in browsers (where compiling a
+// large module synchronously is not allowed everywhere).
 //
 // The Rust side reads every user value through catching calls and checks it
 // before touching state (src/wasm/interop.rs). Two hazards live in the
@@ -26,14 +29,17 @@
 // arguments, instead of 27 property lookups from inside wasm. Same results,
 // same errors.
 import * as core from './navguard_core.js';
+import * as audit from './navguard_audit.js';
 import * as lab from './navguard_lab.js';
 import { loader } from './loader.js';
 
 // ---- module loading ----------------------------------------------------
 
 let coreReady = false;
+let auditReady = false;
 let labReady = false;
 let corePromise = null;
+let auditPromise = null;
 let labPromise = null;
 
 // Per-module state read once the core is instantiated.
@@ -60,6 +66,15 @@ function needCore() {
   coreLoaded();
 }
 
+function needAudit() {
+  if (auditReady) return;
+  if (!loader.auditSync) {
+    throw new Error('navguard: the audit module (auditBytes, Auditor, StreamAuditor, metrics) is not loaded yet: `await loadAudit()` first');
+  }
+  audit.initSync({ module: loader.auditSync() });
+  auditReady = true;
+}
+
 function needLab() {
   if (labReady) return;
   if (!loader.labSync) {
@@ -84,6 +99,21 @@ export function init() {
   return corePromise;
 }
 
+/** Load the audit module (auditBytes, Auditor, StreamAuditor, metrics).
+ * Needed once in browsers before those; optional in Node. */
+export function loadAudit() {
+  if (auditReady) return Promise.resolve();
+  auditPromise ??= (async () => {
+    const bytes = await loader.audit();
+    if (!auditReady) {
+      await audit.default({ module_or_path: bytes });
+      auditReady = true;
+    }
+  })();
+  auditPromise.catch(() => { auditPromise = null; });
+  return auditPromise;
+}
+
 /** Load the lab module (simulators, comparison, training, tightly coupled
  * detector). Needed once in browsers before a lab API; optional in Node. */
 export function loadLab() {
@@ -101,7 +131,7 @@ export function loadLab() {
 
 /** Which wasm modules are instantiated (for size checks). */
 export function loadedModules() {
-  return { core: coreReady, lab: labReady };
+  return { core: coreReady, audit: auditReady, lab: labReady };
 }
 
 export default init;
@@ -178,6 +208,7 @@ function adopt(Class, obj, init) {
 
 // A module function that first makes sure its module is loaded.
 const coreFn = (f) => function (...args) { needCore(); return f(...args); };
+const auditFn = (f) => function (...args) { needAudit(); return f(...args); };
 const labFn = (f) => function (...args) { needLab(); return f(...args); };
 
 // ---- the core module ---------------------------------------------------
@@ -254,30 +285,39 @@ function pushSample(det, sample) {
 }
 guardClass(Detector, core.Detector, 'Detector', ['push']);
 
-export class Auditor extends core.Auditor {
-  constructor(bytes, config) {
-    needCore();
-    super(bytes, config);
-  }
-}
-guardClass(Auditor, core.Auditor, 'Auditor');
-
-export class StreamAuditor extends core.StreamAuditor {
-  constructor(config, keepOutputs) {
-    needCore();
-    super(config, keepOutputs);
-  }
-}
-guardClass(StreamAuditor, core.StreamAuditor, 'StreamAuditor');
-
-export const auditBytes = coreFn(core.auditBytes);
 export const readLog = coreFn(core.readLog);
-export const metrics = coreFn(core.metrics);
 export const snapshotInfo = coreFn(core.snapshotInfo);
 export const columnNames = coreFn(core.columnNames);
 export const version = coreFn(core.version);
-export const wasmMemoryBytes = coreFn(core.wasmMemoryBytes);
 export const scenarioNames = coreFn(core.scenarioNames);
+
+/** Bytes of wasm linear memory: the core's, plus the audit module's once
+ * it is loaded (what an audit grows). */
+export function wasmMemoryBytes() {
+  needCore();
+  return core.wasmMemoryBytes() + (auditReady ? audit.__wasmMemoryBytes() : 0);
+}
+
+// ---- the audit module --------------------------------------------------
+
+export class Auditor extends audit.Auditor {
+  constructor(bytes, config) {
+    needAudit();
+    super(bytes, config);
+  }
+}
+guardClass(Auditor, audit.Auditor, 'Auditor');
+
+export class StreamAuditor extends audit.StreamAuditor {
+  constructor(config, keepOutputs) {
+    needAudit();
+    super(config, keepOutputs);
+  }
+}
+guardClass(StreamAuditor, audit.StreamAuditor, 'StreamAuditor');
+
+export const auditBytes = auditFn(audit.auditBytes);
+export const metrics = auditFn(audit.metrics);
 
 // ---- the lab module ----------------------------------------------------
 

@@ -1,14 +1,15 @@
 // Assemble the publishable package in pkg/ and the page's copy in www/pkg/
-// from the two wasm-bindgen outputs in target/bindgen/ (see .ci/build) and
+// from the three wasm-bindgen outputs in target/bindgen/ (see .ci/build) and
 // the hand-written files of pkg-config/.
 //
 // pkg/ holds, for every target, one set of files:
-//   navguard_{core,lab}.js       wasm-bindgen's glue (target web: an ES module
-//                                 that takes the .wasm bytes from us)
-//   navguard_{core,lab}_bg.wasm  the modules, read from disk in Node
-//   navguard_{core,lab}_wasm.js  the same bytes as base64 modules, for
-//                                 browsers and bundlers (no config needed)
-//   api.js, loader.js            the API (guards, fast push, lazy lab)
+//   navguard_{core,audit,lab}.js       wasm-bindgen's glue (target web: an
+//                                       ES module that takes the .wasm bytes)
+//   navguard_{core,audit,lab}_bg.wasm  the modules, read from disk in Node
+//   navguard_{core,audit,lab}_wasm.js  the same bytes as base64 modules, for
+//                                       browsers and bundlers (no config)
+//   api.js, loader.js            the API (guards, fast push, lazy audit and
+//                                 lab modules)
 //   node.js, node.cjs            Node entries (ESM; CJS bundled by esbuild)
 //   navguard.js                  browser entry
 //   index.d.ts, index.d.cts      public types, made from the glue's
@@ -23,7 +24,7 @@ const root = join(here, '..');
 const bindgen = join(root, 'target', 'bindgen');
 const pkg = join(root, 'pkg');
 const www = join(root, 'www', 'pkg');
-const MODULES = ['core', 'lab'];
+const MODULES = ['core', 'audit', 'lab'];
 
 const cargo = readFileSync(join(root, 'Cargo.toml'), 'utf8');
 const version = /^version\s*=\s*"([^"]+)"/m.exec(cargo)[1];
@@ -82,7 +83,7 @@ for (const f of ['navguard.js', 'api.js', 'loader.js', ...MODULES.flatMap((m) =>
   copyFileSync(join(pkg, f), join(www, f));
 }
 
-// The public declarations: both modules' glue declarations (each module's
+// The public declarations: every module's glue declarations (each module's
 // `typescript_custom_section`s and classes) with wasm-bindgen's init
 // functions, `[Symbol.dispose]` (needs a lib most projects do not have; the
 // method exists at run time) and the package's internal `__` names taken
@@ -92,10 +93,12 @@ function publicTypes() {
 /** Load the core wasm module. Needed once in browsers before any other call; optional in Node (it loads on first use). */
 export function init(): Promise<void>;
 export default init;
+/** Load the audit module (auditBytes, Auditor, StreamAuditor, metrics). Needed once in browsers before those; optional in Node. */
+export function loadAudit(): Promise<void>;
 /** Load the lab module (simulators, comparison, training, tightly coupled detector). Needed once in browsers before a lab API; optional in Node. */
 export function loadLab(): Promise<void>;
 /** Which wasm modules are instantiated. */
-export function loadedModules(): { core: boolean; lab: boolean };
+export function loadedModules(): { core: boolean; audit: boolean; lab: boolean };
 `;
   for (const m of MODULES) {
     let d = readFileSync(join(bindgen, `navguard_${m}.d.ts`), 'utf8');

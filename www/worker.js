@@ -18,7 +18,7 @@
 // A comparison runs in slices of ~50 ms, so audit messages are served in
 // between (each job keeps its own wasm object).
 import { flightSeries, renderReport } from './report-html.js';
-import init, { loadLab, Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, tightGanTrain, version } from './pkg/navguard.js';
+import init, { loadAudit, loadLab, Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, tightGanTrain, version } from './pkg/navguard.js';
 
 // Messages that need the lab wasm module, loaded on the first of them.
 const LAB = new Set(['compare', 'tight', 'gan-train', 'sim']);
@@ -259,6 +259,9 @@ async function parse(id) {
 async function audit(id, config) {
   const samples = `${log.rows.toLocaleString('en-US')} samples`;
   progress(id, 'detecting', 0, `running the detector over ${samples}: 0 %`);
+  // The audit module (its own detector and readers, ~300 KB) loads on the
+  // first audit: plotting a log (readLog) needs only the core.
+  await loadAudit();
   await yieldNow();
   const a = new Auditor(bytes, config);
   try {

@@ -16,6 +16,7 @@
 //! premises take gradient steps on the
 //! squared error. `exp` comes from `libm` so native and wasm agree bit for bit.
 
+use crate::MinMax;
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
@@ -50,7 +51,7 @@ pub fn gauss(x: f64, c: f64, s: f64) -> f64 {
 /// Map the indicators to the ANFIS input space.
 #[inline]
 pub fn inputs(r: f64, c: f64) -> [f64; 2] {
-    let r = if r.is_finite() { r.max(0.0) } else { 1e6 };
+    let r = if r.is_finite() { r.fmax(0.0) } else { 1e6 };
     let c = if c.is_finite() { c.clamp(0.0, 1.0) } else { 0.0 };
     [libm::log1p(r), c]
 }
@@ -61,10 +62,10 @@ impl Anfis {
         let mut centre = [[0.0; M]; 2];
         let mut sigma = [[0.0; M]; 2];
         for k in 0..2 {
-            let span = (hi[k] - lo[k]).max(0.2);
+            let span = (hi[k] - lo[k]).fmax(0.2);
             for m in 0..M {
                 centre[k][m] = lo[k] + span * m as f64 / (M - 1) as f64;
-                sigma[k][m] = (span / (2.0 * (M - 1) as f64)).max(MIN_SIGMA);
+                sigma[k][m] = (span / (2.0 * (M - 1) as f64)).fmax(MIN_SIGMA);
             }
         }
         Anfis { centre, sigma, conseq: [[0.0; CP]; RULES] }
@@ -130,6 +131,7 @@ impl Anfis {
 
     /// Least-squares step: consequents for fixed premises. `ridge` (≥0)
     /// regularises rules that no sample fires.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn fit_consequents(&mut self, xs: &[[f64; 2]], ys: &[f64], ridge: f64) -> bool {
         let n = xs.len().min(ys.len());
         if n == 0 {
@@ -162,7 +164,7 @@ impl Anfis {
             for b in 0..a {
                 ata[(a, b)] = ata[(b, a)];
             }
-            ata[(a, a)] += ridge.max(1e-9);
+            ata[(a, a)] += ridge.fmax(1e-9);
         }
         // Cholesky on the (regularised) normal equations; if rounding leaves
         // them indefinite, raise the ridge tenfold and retry. Fixed-size, so
@@ -193,6 +195,7 @@ impl Anfis {
     }
 
     /// Mean squared error over a data set.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn mse(&self, xs: &[[f64; 2]], ys: &[f64]) -> f64 {
         let n = xs.len().min(ys.len());
         if n == 0 {
@@ -203,6 +206,7 @@ impl Anfis {
 
     /// Gradient of the mean squared error w.r.t. premise parameters
     /// (`[input][mf]` for centres, then widths).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn premise_gradient(&self, xs: &[[f64; 2]], ys: &[f64]) -> ([[f64; M]; 2], [[f64; M]; 2]) {
         let n = xs.len().min(ys.len());
         let mut gc = [[0.0; M]; 2];
@@ -259,6 +263,7 @@ impl Anfis {
     /// Hybrid learning: alternate least squares on consequents and
     /// `epochs` gradient steps on premises with step `lr`. Returns final MSE.
     /// Parameters that would become non-finite are left as they were.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn train_hybrid(&mut self, xs: &[[f64; 2]], ys: &[f64], epochs: usize, lr: f64) -> f64 {
         let ridge = 1e-6 * xs.len().max(1) as f64;
         self.fit_consequents(xs, ys, ridge);
@@ -271,7 +276,7 @@ impl Anfis {
             for i in 0..2 {
                 for m in 0..M {
                     cand.centre[i][m] -= step * gc[i][m];
-                    cand.sigma[i][m] = (cand.sigma[i][m] - step * gs[i][m]).max(MIN_SIGMA);
+                    cand.sigma[i][m] = (cand.sigma[i][m] - step * gs[i][m]).fmax(MIN_SIGMA);
                 }
             }
             if !cand.is_finite() {
@@ -294,10 +299,13 @@ impl Anfis {
     }
 
     /// Every parameter finite and every width positive.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn is_finite(&self) -> bool {
-        self.centre.iter().flatten().all(|v| v.is_finite())
-            && self.sigma.iter().flatten().all(|v| v.is_finite() && *v > 0.0)
-            && self.conseq.iter().flatten().all(|v| v.is_finite())
+        // Over flat slices: `iter().flatten()` of nested arrays made 1.7 KB
+        // of wasm.
+        self.centre.as_flattened().iter().all(|v| v.is_finite())
+            && self.sigma.as_flattened().iter().all(|v| v.is_finite() && *v > 0.0)
+            && self.conseq.as_flattened().iter().all(|v| v.is_finite())
     }
 }
 

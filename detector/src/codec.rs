@@ -175,6 +175,7 @@ pub trait Codec: Sized {
 }
 
 /// `value` as bytes.
+#[cfg_attr(navguard_cold_size, optimize(size))]
 pub fn to_bytes<T: Codec>(value: &T) -> Vec<u8> {
     let mut w = Vec::new();
     value.encode(&mut w);
@@ -202,6 +203,7 @@ const MAX_UNPACKED: usize = 1 << 24;
 /// itself). The embedded threshold pools ship packed: 21 KB of postcard
 /// bytes, a third of it zeros and repeats, in 8 KB of the core wasm module.
 /// Never panics: bad input is an error.
+#[cfg_attr(navguard_cold_size, optimize(size))]
 pub fn unpack(packed: &[u8]) -> Result<Vec<u8>, CodecError> {
     let mut r = Reader::new(packed);
     let mut out: Vec<u8> = Vec::new();

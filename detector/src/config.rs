@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 use crate::filter::FilterNoise;
 use crate::indicators::IndicatorSettings;
 use crate::methods::Method;
+use navguard_logs::decimal::Shortest;
 
 pub use crate::error::ConfigError;
 
@@ -125,7 +126,7 @@ fn num(field: &str, v: Option<f64>, lo: f64, hi: f64, default: f64) -> Result<f6
     match v {
         None => Ok(default),
         Some(x) if x.is_finite() && x >= lo && x <= hi => Ok(x),
-        Some(x) => Err(ConfigError::new(field, format!("must be a number in [{lo}, {hi}], got {x}"))),
+        Some(x) => Err(ConfigError::new(field, format!("must be a number in [{}, {}], got {}", Shortest(lo), Shortest(hi), Shortest(x)))),
     }
 }
 
@@ -134,7 +135,7 @@ fn int(field: &str, v: Option<f64>, lo: usize, hi: usize, default: usize) -> Res
     match v {
         None => Ok(default),
         Some(x) if x.is_finite() && x.fract() == 0.0 && x >= lo as f64 && x <= hi as f64 => Ok(x as usize),
-        Some(x) => Err(ConfigError::new(field, format!("must be an integer in {lo}..={hi}, got {x}"))),
+        Some(x) => Err(ConfigError::new(field, format!("must be an integer in {lo}..={hi}, got {}", Shortest(x)))),
     }
 }
 
@@ -158,6 +159,7 @@ impl ConfigInput {
 
     /// Validate into a [`Config`].
     #[inline]
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check(&self) -> Result<Config, ConfigError> {
         let d = Config::default();
         let method = match &self.method {
@@ -383,7 +385,7 @@ mod plain {
     fn float_text(x: f64) -> String {
         // `{:e}` of |x|: the shortest digits, a dot after the first, `e`,
         // the exponent.
-        let sci = format!("{:e}", x.abs());
+        let sci = navguard_logs::decimal::Sci(x.abs()).to_string();
         let mut digits = Vec::new();
         let mut exp = 0i32;
         let mut bytes = sci.bytes();

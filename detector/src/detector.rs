@@ -45,6 +45,7 @@
 //! `Withheld` groups (episode start and end, gating), and `Learning` (the
 //! ANFIS and its databases).
 
+use crate::MinMax;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
@@ -58,6 +59,7 @@ use crate::indicators::{IndicatorEngine, Indicators, GROUPS};
 use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolState};
 pub use crate::model::{has_signature, Model};
 use crate::sample::{range_of, Sample};
+use navguard_logs::decimal::Shortest;
 use crate::dragend::DragEnd;
 use crate::flatline::{self, Flatline};
 use crate::track::VelocityTrack;
@@ -250,6 +252,7 @@ impl Ring {
         &self.buf[..self.len]
     }
     /// Indices in range and capacity `q` (a restored snapshot may be forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn check_shape(&self, q: usize, name: &str) -> Result<(), String> {
         let cap = self.buf.len();
         if cap != q.max(1) || self.head >= cap || self.len > cap {
@@ -558,7 +561,7 @@ impl ReceiverQuality {
         if self.scale(eph) >= QUALITY_DEGRADED && f64::from(self.learnt) * QUALITY_ALPHA >= 1.0 {
             return;
         }
-        let w = QUALITY_ALPHA.max(1.0 / (f64::from(self.learnt) + 1.0));
+        let w = QUALITY_ALPHA.fmax(1.0 / (f64::from(self.learnt) + 1.0));
         self.ln_eph = Some(l + w * (x - l));
         self.learnt = self.learnt.saturating_add(1);
     }
@@ -646,7 +649,7 @@ impl Clock {
         if reports_no_fix && t - lf > 0.5 * self.gps_dt {
             return true;
         }
-        let auto = SILENT_OUTAGE_S.max(3.0 * self.gps_dt).max(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
+        let auto = SILENT_OUTAGE_S.fmax(3.0 * self.gps_dt).fmax(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
         flying && t - lf > timeout.unwrap_or(auto)
     }
 }
@@ -673,10 +676,10 @@ impl ImuNoise {
             let dt = t - tp;
             if dt > 0.0 && dt < 0.5 {
                 let ms = (0..3).map(|a| (f[a] - fp[a]).powi(2)).sum::<f64>() / 6.0;
-                self.psd += (dt / IMU_PSD_TAU).min(1.0) * (ms * dt - self.psd);
+                self.psd += (dt / IMU_PSD_TAU).fmin(1.0) * (ms * dt - self.psd);
                 // A dropped stretch of records is not the logging rate.
                 if dt <= IMU_MAX_PERIOD_S * 6.0 {
-                    self.period = if self.period > 0.0 { self.period + (dt / IMU_PERIOD_TAU_S).min(1.0) * (dt - self.period) } else { dt };
+                    self.period = if self.period > 0.0 { self.period + (dt / IMU_PERIOD_TAU_S).fmin(1.0) * (dt - self.period) } else { dt };
                 }
             }
         }
@@ -1061,7 +1064,7 @@ impl ReceiverClock {
             return None;
         }
         let b = sxy / sxx;
-        let sse = (syy - b * sxy).max(0.0);
+        let sse = (syy - b * sxy).fmax(0.0);
         Some((b, libm::sqrt(sse / dof as f64 / sxx) * t_over_z(RECEIVER_Z, dof as f64)))
     }
 
@@ -1200,7 +1203,7 @@ impl Consistency {
         };
         let floor = if epv.is_finite() { epv } else { 0.0 };
         let zs = |(now, prev, s): (f64, f64, f64)| {
-            let s = s.max(floor);
+            let s = s.fmax(floor);
             (now / s, prev / s)
         };
         let ((bn, bp), (zn, zp)) = (zs(b), zs(z));
@@ -1212,7 +1215,7 @@ impl Consistency {
             self.track.rebase_axis(2);
             return (0.0, true);
         }
-        (if bn * zn > 0.0 { bn.abs().min(zn.abs()) } else { 0.0 }, false)
+        (if bn * zn > 0.0 { bn.abs().fmin(zn.abs()) } else { 0.0 }, false)
     }
 
     /// The baro came back onto its level against the GPS altitude at this
@@ -1254,6 +1257,8 @@ impl Consistency {
     /// on a horizontal jump off the velocity track arms the drag-off's end
     /// confirmation (see `dragend`); an episode that ended, or re-anchored,
     /// disarms it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn arm_drag_end(&mut self, t: f64, opened_on_position: bool, step: &EpisodeStep) {
         if !step.fault || step.reset {
             self.drag_end.disarm();
@@ -1369,8 +1374,8 @@ impl Consistency {
         // (NaN, not judged, unless both are); and its drift over a long
         // window, against both (see `drift`).
         let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
-        let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.min(to_doppler) * GATE };
-        out.fold(2, dep.max(drift * DRIFT_R_SCALE));
+        let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
+        out.fold(2, dep.fmax(drift * DRIFT_R_SCALE));
         // The baro's reading held bit for bit while it still arrives (a
         // baro that stops arriving is not judged on its last run).
         if self.last_baro.is_some_and(|(tb, _)| t - tb < 0.5) {
@@ -1423,7 +1428,7 @@ impl Methods {
     /// A baro sample's innovation (ν m, S m²): the epoch keeps its largest
     /// normalised one.
     fn note_baro(&mut self, nu: f64, s: f64) {
-        let g = |(nu, s): (f64, f64)| nu.abs() / s.max(1e-12).sqrt();
+        let g = |(nu, s): (f64, f64)| nu.abs() / s.fmax(1e-12).sqrt();
         if self.baro_inn.is_none_or(|b| g((nu, s)) > g(b)) {
             self.baro_inn = Some((nu, s));
         }
@@ -1544,6 +1549,8 @@ impl Withheld {
 
     /// Feed every group again (normal verdict, re-anchoring, data gap). The
     /// baro's calm count restarts at the next baro sample that is fed.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn release(&mut self) {
         self.groups = [false; GROUPS];
     }
@@ -1556,6 +1563,8 @@ impl Withheld {
     /// ramp) keeps aiding it, which keeps the coast drift, and so the
     /// departure's normalisation, small. GPS position and velocity come from
     /// one receiver, so each can take the other with it (below).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn withhold(&mut self, ev: &Evidence) {
         for g in 0..GROUPS {
             self.groups[g] |= ev.departed(g);
@@ -1716,6 +1725,8 @@ fn undoes(jump: &[f64; 3], off: &[f64; 3], min2: f64) -> bool {
 
 impl Episode {
     /// A row without a fix declared an outage.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn outage(&mut self, last_fix: Option<f64>) {
         self.active = true;
         self.imu = false;
@@ -1729,6 +1740,8 @@ impl Episode {
     /// The episode stage, first half: a fault verdict opens an episode (or
     /// continues one), an IMU episode ends once the IMU is calm again, and a
     /// normal verdict closes it. Returns whether the epoch stays a fault.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn open(&mut self, fault: bool, ind: &mut IndicatorEngine, oracle: bool) -> bool {
         let mut fault = fault;
         if fault {
@@ -1795,7 +1808,7 @@ impl Episode {
         if self.receiver_lost {
             max_coast
         } else {
-            max_coast.max(POSITION_COAST_S)
+            max_coast.fmax(POSITION_COAST_S)
         }
     }
 
@@ -1871,6 +1884,8 @@ impl Episode {
     }
 
     /// The filter was re-anchored on GPS: nothing coasts any more.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn reanchored(&mut self) {
         self.coast_start = None;
         self.calm_epochs = 0;
@@ -1902,6 +1917,8 @@ struct Learning {
 }
 
 impl Learning {
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn new(model: &Model, q: usize) -> Self {
         Learning {
             anfis: model.anfis.clone(),
@@ -1963,6 +1980,7 @@ impl Detector {
 
     /// Detector with an explicit model (the config's `model` field is ignored).
     #[inline]
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn with_model(cfg: Config, model: &Model) -> Self {
         Detector {
             kf: None,
@@ -1992,6 +2010,7 @@ impl Detector {
     /// snapshot is an error, not an index panic later), and restore the
     /// scratch buffers that snapshots do not carry.
     #[inline]
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub(crate) fn check_restored(&mut self) -> Result<(), String> {
         let checked = self.cfg.to_input().check()?;
         if checked != self.cfg {
@@ -2130,7 +2149,7 @@ impl Detector {
                 return Err(InputError {
                     row,
                     field: "t",
-                    reason: format!("time goes backwards: {} after {}", s.t, lt),
+                    reason: format!("time goes backwards: {} after {}", Shortest(s.t), Shortest(lt)),
                 });
             }
         }
@@ -2224,6 +2243,8 @@ impl Detector {
 
     /// Every sensor stopped: a logging gap, not a navigation fault. No
     /// verdict carries across it: it starts from "no GPS yet".
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn data_gap(&mut self) {
         self.stats.data_gaps += 1;
         self.last = Output { kind: kind::NO_GPS, driver: 255, ..Output::default() };
@@ -2294,6 +2315,8 @@ impl Detector {
         self.kf.as_ref().is_some_and(kf_flying)
     }
 
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn filter_failed(&mut self, _e: FilterError) {
         // Re-initialise at the next fix; keep the verdict history.
         self.stats.filter_errors += 1;
@@ -2355,6 +2378,8 @@ impl Detector {
 
     /// The first fix, or the first after a data gap or a filter error,
     /// starts the filter on it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn start_filter(&mut self, fix: &Fix) {
         let noise = self.cfg.filter_noise();
         let v0 = fix.vel.unwrap_or_else(Vector3::zeros);
@@ -2503,6 +2528,8 @@ impl Detector {
     }
 
     /// The filter was re-anchored on GPS: every reference restarts.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn reanchored(&mut self) {
         self.stats.filter_resets += 1;
         self.episode.reanchored();
@@ -2538,6 +2565,7 @@ impl Detector {
     /// misclassifies more of D0 (the shipped model's own databases) than the
     /// current one: online data may drift, but not so far that the detector
     /// forgets the labelled faults it shipped with.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn retrain(&mut self) {
         let l = &mut self.learning;
         let w = l.retrain_samples();
@@ -2572,6 +2600,7 @@ impl Detector {
     }
 
     /// Misclassified D0 samples at the configured threshold.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn d0_errors(&self, a: &Anfis) -> usize {
         let th = self.cfg.threshold;
         let l = &self.learning;

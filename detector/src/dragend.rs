@@ -27,6 +27,7 @@
 //! receiver, 0.18 m/s of shift against 0.04 m/s of white σ). The detector
 //! then re-anchors on the fix: the episode flags the seconds the
 //! confirmation takes, not the coast limit.
+use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
 /// Span of `z` before the jump that its level is taken over, s.
@@ -155,9 +156,9 @@ impl DragEnd {
         }
         self.pending = None;
         let mean_a = p.sum_a / p.n_a;
-        let ss_a = (p.sum2_a - p.n_a * mean_a * mean_a).max(0.0);
-        let var = ((p.ss_b + ss_a) / (p.n_b + p.n_a - 2.0)).max(SIGMA_FLOOR * SIGMA_FLOOR);
-        let sigma = (var * (1.0 / p.n_b + 1.0 / p.n_a)).sqrt().max(self.ms.sqrt());
+        let ss_a = (p.sum2_a - p.n_a * mean_a * mean_a).fmax(0.0);
+        let var = ((p.ss_b + ss_a) / (p.n_b + p.n_a - 2.0)).fmax(SIGMA_FLOOR * SIGMA_FLOOR);
+        let sigma = (var * (1.0 / p.n_b + 1.0 / p.n_a)).sqrt().fmax(self.ms.sqrt());
         let shift = mean_a - p.mean_b;
         let age = p.len / shift;
         shift > Z * sigma && (MIN_AGE_S..=flown).contains(&age)
@@ -186,9 +187,9 @@ impl DragEnd {
         let (Some(a), Some(b)) = (after, before) else { return };
         let lim = 9.0 * self.ms;
         for k in 0..2 {
-            let x = ((a[k] - b[k]) * (a[k] - b[k])).min(lim);
+            let x = ((a[k] - b[k]) * (a[k] - b[k])).fmin(lim);
             self.learnt += 1.0;
-            let w = (1.0 / (self.learnt + PRIOR_N)).max(ALPHA);
+            let w = (1.0 / (self.learnt + PRIOR_N)).fmax(ALPHA);
             self.ms += w * (x - self.ms);
         }
     }

@@ -54,6 +54,7 @@
 //!
 //! The window, its entries and σ's slow learning are `window`'s, shared
 //! with the position's ramp test (`ramp`).
+use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
 pub use crate::window::Motion;
@@ -82,7 +83,7 @@ const RELEASE_Z: f64 = 2.0;
 
 /// How far a healthy baro's error may move between motions `a` and `b`, m.
 fn allowance(a: &Motion, b: &Motion) -> f64 {
-    let ground = if a.height.min(b.height) < GROUND_BAND_M { GROUND_M } else { 0.0 };
+    let ground = if a.height.fmin(b.height) < GROUND_BAND_M { GROUND_M } else { 0.0 };
     K_DYN * (a.speed2 - b.speed2).abs() + K_CLIMB * (a.climb - b.climb).abs() + ground
 }
 
@@ -125,7 +126,7 @@ fn net_change(a: &Entry, b: &Entry, scale: f64) -> [f64; 2] {
     let allow = allowance(&b.motion, &a.motion);
     core::array::from_fn(|k| {
         let s = (b.x[k] - a.x[k]) * scale;
-        s.signum() * (s.abs() - allow).max(0.0)
+        s.signum() * (s.abs() - allow).fmax(0.0)
     })
 }
 
@@ -167,7 +168,7 @@ impl DriftTest {
         // Smoothed over `SMOOTH_S`: a single fix's altitude carries the
         // receiver's white noise (1–2 m at 5 Hz), which a ramp's change
         // over the window does not need to compete with.
-        let w = (dt / SMOOTH_S).min(1.0);
+        let w = (dt / SMOOTH_S).fmin(1.0);
         let raw = Entry { t, x: [level[0], level[1], 0.0], motion };
         let level = match self.smooth {
             Some(p) => core::array::from_fn(|k| p[k] + w * (level[k] - p[k])),
@@ -189,7 +190,7 @@ impl DriftTest {
         // last `RECENT_S` gives over `SPAN_S`).
         let recent = r0.map_or([f64::NAN; 2], |r0| net_change(&r0, &e, SPAN_S / (t - r0.t)));
         let z: [f64; 2] = core::array::from_fn(|k| self.last[k].abs() / self.sigma(k));
-        let full = if self.last[0] * self.last[1] > 0.0 { z[0].min(z[1]) } else { 0.0 };
+        let full = if self.last[0] * self.last[1] > 0.0 { z[0].fmin(z[1]) } else { 0.0 };
         if self.judging {
             // Judged from the level before the drift until the baro is back
             // on it (by either reference). The GPS altitude's return after a
@@ -198,16 +199,16 @@ impl DriftTest {
             let z_raw = net_change(&e0, &raw, 1.0)[0].abs() / self.sigma(0);
             if full < RELEASE_Z || (z_raw < RELEASE_Z && z[1] >= DRIFT_Z) {
                 self.judging = false;
-                self.returned = z_raw.min(z[0]) < RELEASE_Z && z[1] >= DRIFT_Z;
+                self.returned = z_raw.fmin(z[0]) < RELEASE_Z && z[1] >= DRIFT_Z;
                 self.window.restart();
                 self.smooth = Some([raw.x[0], raw.x[1]]);
-                return full.min(z_raw);
+                return full.fmin(z_raw);
             }
             return full;
         }
         let zr: [f64; 2] = core::array::from_fn(|k| recent[k].abs() / self.sigma(k));
         let going_on = (0..2).all(|k| recent[k] * self.last[k] > 0.0);
-        let stat = if going_on { full.min(zr[0]).min(zr[1]) } else { 0.0 };
+        let stat = if going_on { full.fmin(zr[0]).fmin(zr[1]) } else { 0.0 };
         self.judging = stat >= DRIFT_Z;
         stat
     }
@@ -229,7 +230,7 @@ impl DriftTest {
             return;
         }
         let sigma = [self.sigma(0), self.sigma(1)];
-        learn_axes(&mut self.ms, &self.last, sigma, (self.dt / TAU_S).min(1.0));
+        learn_axes(&mut self.ms, &self.last, sigma, (self.dt / TAU_S).fmin(1.0));
     }
 }
 

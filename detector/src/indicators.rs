@@ -139,6 +139,7 @@
 //! leaves), re-summed exactly once per window length to shed rounding, so the
 //! per-epoch cost is O(1) in `w`.
 
+use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
 /// Residual groups: GPS position, GPS velocity, barometer.
@@ -293,7 +294,7 @@ impl Indicators {
     pub fn fold(&mut self, g: usize, x: f64) {
         if x.is_finite() && self.r_group[g].is_finite() && x > self.r_group[g] {
             self.r_group[g] = x;
-            self.r = self.r.max(x);
+            self.r = self.r.fmax(x);
         }
     }
 }
@@ -326,7 +327,7 @@ const PRIOR_EPOCHS: f64 = 4.0;
 /// from `learnt` samples: a running mean over the prior (`PRIOR_EPOCHS`)
 /// and the samples until it reaches the forgetting factor `alpha`.
 fn fast_start_weight(alpha: f64, learnt: u32) -> f64 {
-    alpha.max(1.0 / (f64::from(learnt) + PRIOR_EPOCHS))
+    alpha.fmax(1.0 / (f64::from(learnt) + PRIOR_EPOCHS))
 }
 
 impl AxisState {
@@ -348,7 +349,7 @@ impl AxisState {
             return;
         }
         let lim = 16.0 * sigma * sigma;
-        self.ms += self.learn_weight(alpha) * ((e * e).min(lim) - self.ms);
+        self.ms += self.learn_weight(alpha) * ((e * e).fmin(lim) - self.ms);
         self.learnt = self.learnt.saturating_add(1);
     }
 }
@@ -484,7 +485,7 @@ impl PvTest {
         self.stat = f64::NAN;
     }
     fn sigma(&self, a: usize) -> f64 {
-        self.ms[a].sqrt().max(PV_FLOOR)
+        self.ms[a].sqrt().fmax(PV_FLOOR)
     }
     /// Record one epoch's raw mismatch for the incoherence measure only.
     fn note(&mut self, u: [f64; 3]) {
@@ -492,7 +493,7 @@ impl PvTest {
             self.inc_len = 0;
             return;
         }
-        let z2 = (0..3).map(|a| (u[a] * u[a] / self.ms_u[a].max(PV_U_FLOOR * PV_U_FLOOR)).min(1e6)).sum::<f64>() / 3.0;
+        let z2 = (0..3).map(|a| (u[a] * u[a] / self.ms_u[a].fmax(PV_U_FLOOR * PV_U_FLOOR)).fmin(1e6)).sum::<f64>() / 3.0;
         self.inc[self.inc_head] = z2;
         self.inc_head = (self.inc_head + 1) % self.inc_cap;
         self.inc_len = (self.inc_len + 1).min(self.inc_cap);
@@ -504,7 +505,7 @@ impl PvTest {
         if self.inc_len == 0 {
             return f64::NAN;
         }
-        self.inc[..self.inc_len].iter().fold(f64::INFINITY, |m, &z| m.min(z)).sqrt()
+        self.inc[..self.inc_len].iter().fold(f64::INFINITY, |m, &z| m.fmin(z)).sqrt()
     }
     fn push(&mut self, u: [f64; 3]) {
         if !u.iter().all(|v| v.is_finite()) {
@@ -513,7 +514,7 @@ impl PvTest {
         }
         self.last_u = u;
         let u: [f64; 3] = core::array::from_fn(|a| {
-            let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
+            let lim = PV_CLIP * self.ms_u[a].sqrt().fmax(PV_U_FLOOR);
             u[a].clamp(-lim, lim)
         });
         let cap = self.ring.len();
@@ -559,8 +560,8 @@ impl PvTest {
         let w_u = fast_start_weight(PV_ALPHA_U, self.learnt_u);
         self.learnt_u = self.learnt_u.saturating_add(1);
         for a in 0..3 {
-            let lim = PV_CLIP * self.ms_u[a].sqrt().max(PV_U_FLOOR);
-            let x = (self.last_u[a] * self.last_u[a]).min(lim * lim);
+            let lim = PV_CLIP * self.ms_u[a].sqrt().fmax(PV_U_FLOOR);
+            let x = (self.last_u[a] * self.last_u[a]).fmin(lim * lim);
             self.ms_u[a] += w_u * (x - self.ms_u[a]);
         }
         if self.len < self.ring.len() {
@@ -573,7 +574,7 @@ impl PvTest {
         for a in 0..3 {
             let sg = self.sigma(a);
             // Winsorised at 3σ.
-            let x = (self.sum[a] * self.sum[a]).min(9.0 * sg * sg);
+            let x = (self.sum[a] * self.sum[a]).fmin(9.0 * sg * sg);
             self.ms[a] += w_s * (x - self.ms[a]);
         }
     }
@@ -689,7 +690,7 @@ impl<const D: usize> LagTest<D> {
 
     /// The statistic of the last `push` (NaN when it had none).
     pub fn last_stat(&self) -> f64 {
-        let scale = (self.last_dt / self.span).max(1.0).sqrt();
+        let scale = (self.last_dt / self.span).fmax(1.0).sqrt();
         let z2: f64 = (0..D).map(|a| (self.last_s[a] / (self.sigma(a) * scale)).powi(2)).sum();
         (z2 / D as f64).sqrt()
     }
@@ -709,7 +710,7 @@ impl<const D: usize> LagTest<D> {
     }
 
     fn sigma(&self, a: usize) -> f64 {
-        self.ms[a].sqrt().max(self.floor)
+        self.ms[a].sqrt().fmax(self.floor)
     }
 
     fn oldest(&self) -> (f64, [f64; D]) {
@@ -778,12 +779,12 @@ impl<const D: usize> LagTest<D> {
             return f64::NAN;
         }
         self.last_t = t;
-        let scale = (dt / self.span).max(1.0).sqrt();
+        let scale = (dt / self.span).fmax(1.0).sqrt();
         let allowed = self.allowance(newest, self.oldest_index());
         let mut z2 = 0.0;
         for a in 0..D {
             let s = z[a] - z0[a] - self.rate[a] * dt;
-            let s = s.signum() * (s.abs() - allowed).max(0.0);
+            let s = s.signum() * (s.abs() - allowed).fmax(0.0);
             self.last_s[a] = s;
             let z = s / (self.sigma(a) * scale);
             z2 += z * z;
@@ -804,12 +805,12 @@ impl<const D: usize> LagTest<D> {
         };
         self.t_rate = self.last_t;
         self.learnt = self.learnt.saturating_add(1);
-        let alpha = if self.fast_start { self.alpha.max(1.0 / self.learnt as f64) } else { self.alpha };
+        let alpha = if self.fast_start { self.alpha.fmax(1.0 / self.learnt as f64) } else { self.alpha };
         for a in 0..D {
             let s = self.last_s[a];
             if s.is_finite() {
                 let sg = self.sigma(a);
-                self.ms[a] += alpha * ((s * s).min(9.0 * sg * sg) - self.ms[a]);
+                self.ms[a] += alpha * ((s * s).fmin(9.0 * sg * sg) - self.ms[a]);
                 // Baseline: the remaining mean rate, winsorised like σ.
                 let lim = 3.0 * sg;
                 self.rate[a] += k * s.clamp(-lim, lim) / self.last_dt;
@@ -935,6 +936,7 @@ impl IndicatorEngine {
 
     /// Every ring's capacity and indices match a fresh engine with settings
     /// `set` (a restored snapshot may be corrupt or forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub(crate) fn check_shape(&self, set: &IndicatorSettings) -> Result<(), String> {
         if self.set != *set {
             return Err("indicator settings do not match the config".into());
@@ -968,7 +970,7 @@ impl IndicatorEngine {
     /// σ_Δ currently used for an axis.
     pub fn sigma(&self, axis: usize) -> f64 {
         let g = group_of(axis);
-        self.axes.get(axis).map_or(f64::NAN, |a| a.ms.sqrt().max(self.set.floor[g]))
+        self.axes.get(axis).map_or(f64::NAN, |a| a.ms.sqrt().fmax(self.set.floor[g]))
     }
 
     /// Record one axis' residual `r` (innovation), its predicted change `m`
@@ -987,9 +989,9 @@ impl IndicatorEngine {
             a.has_ref = true;
         }
         if p_prior.is_finite() {
-            a.p_peak = a.p_peak.max(p_prior);
+            a.p_peak = a.p_peak.fmax(p_prior);
         }
-        let var = sigma * sigma + (a.p_peak - a.p_ref).max(0.0);
+        let var = sigma * sigma + (a.p_peak - a.p_ref).fmax(0.0);
         let d = (r - a.r_ref) / var.sqrt();
         let base = g * K;
         self.pending[base] += d * d;
@@ -1083,7 +1085,7 @@ impl IndicatorEngine {
         self.baro.set_hold(held);
         let st = self.baro.push_moving(t, [z], motion);
         if st.is_finite() {
-            self.baro_pending = if self.baro_pending.is_finite() { self.baro_pending.max(st) } else { st };
+            self.baro_pending = if self.baro_pending.is_finite() { self.baro_pending.fmax(st) } else { st };
         }
         st
     }
@@ -1129,9 +1131,9 @@ impl IndicatorEngine {
         // 28 false alarms after the fault in `tests/scenarios.rs`, 13-17
         // with the horizontal alone).
         let v = if self.imu_v.learnt() >= IMU_ARM_WINDOWS { v } else { f64::NAN };
-        let st = h.max(v);
+        let st = h.fmax(v);
         if st.is_finite() {
-            self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.max(st) } else { st };
+            self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.fmax(st) } else { st };
         }
     }
 
@@ -1149,7 +1151,7 @@ impl IndicatorEngine {
         let h = self.imu.recent(dt);
         let leads = self.imu_v.learnt() >= IMU_ARM_WINDOWS && one_axis_as_two(self.imu_v.last_stat()) > self.imu.last_stat();
         if leads {
-            h.max(one_axis_as_two(self.imu_v.recent(dt)))
+            h.fmax(one_axis_as_two(self.imu_v.recent(dt)))
         } else {
             h
         }
@@ -1247,31 +1249,31 @@ impl IndicatorEngine {
         for g in 0..GROUPS {
             let b = g * K;
             if lt[b + 1] > 0.5 && st[b + 1] > 0.5 {
-                let rl = (lt[b].max(0.0) / lt[b + 1]).sqrt();
-                let rs = (st[b].max(0.0) / st[b + 1]).sqrt();
-                let mut rg = rl.min(rs);
+                let rl = (lt[b].fmax(0.0) / lt[b + 1]).sqrt();
+                let rs = (st[b].fmax(0.0) / st[b + 1]).sqrt();
+                let mut rg = rl.fmin(rs);
                 if g == 0 && pv.is_finite() {
-                    rg = rg.max(pv);
+                    rg = rg.fmax(pv);
                 }
                 if g == 2 && baro.is_finite() {
-                    rg = rg.max(baro);
+                    rg = rg.fmax(baro);
                 }
                 // Condemn the baro only if it also left the GPS altitude:
                 // one that follows the GPS altitude while the filter's
                 // height drifts, or through a GPS vertical fault, is fine.
                 if g == 2 && baro_gps.is_finite() {
-                    rg = rg.min(baro_gps.max(1.0));
+                    rg = rg.fmin(baro_gps.fmax(1.0));
                 }
-                unfolded = unfolded.max(rg);
+                unfolded = unfolded.fmax(rg);
                 if g == 1 {
                     vel_unfolded = rg;
                 }
                 if g == 1 && self.imu_fold && imu.is_finite() {
                     out.r_imu = imu * IMU_R_SCALE;
-                    rg = rg.max(out.r_imu);
+                    rg = rg.fmax(out.r_imu);
                 }
                 out.r_group[g] = rg;
-                out.r = out.r.max(rg);
+                out.r = out.r.fmax(rg);
             }
             if st[b + 1] > 0.5 && st[b + 3] > 0.0 {
                 out.inc_group[g] = (st[b + 3] / st[b + 1]).sqrt();
@@ -1285,7 +1287,7 @@ impl IndicatorEngine {
                 let n = C_SHRINK * lt[b + 1];
                 let rho = (em / (ee * (mm + n)).sqrt()).clamp(-1.0, 1.0).abs();
                 out.c_group[g] = rho;
-                out.c = out.c.max(rho);
+                out.c = out.c.fmax(rho);
             }
         }
         self.r_unfolded = unfolded;

@@ -25,6 +25,7 @@
 //!   [`crate::thresholds`]) on the epoch's largest normalised innovation
 //!   `max γ_i`, one threshold per operating mode (speed band).
 
+use crate::MinMax;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -114,13 +115,13 @@ impl EpochInnovations {
     /// Normalised innovations `γ_i = |ν_i| / √S_i` with each channel's
     /// group (0 position, 1 velocity, 2 baro).
     pub fn gamma(&self) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let gps = (0..self.m).map(move |i| (i / 3, self.nu[i].abs() / self.s[(i, i)].max(1e-12).sqrt()));
-        gps.chain(self.baro.map(|(nu, s)| (2, nu.abs() / s.max(1e-12).sqrt())))
+        let gps = (0..self.m).map(move |i| (i / 3, self.nu[i].abs() / self.s[(i, i)].fmax(1e-12).sqrt()));
+        gps.chain(self.baro.map(|(nu, s)| (2, nu.abs() / s.fmax(1e-12).sqrt())))
     }
 
     /// Largest `γ_i` (0 when there are no channels).
     pub fn max_gamma(&self) -> f64 {
-        self.gamma().fold(0.0, |m, (_, g)| m.max(g))
+        self.gamma().fold(0.0, |m, (_, g)| m.fmax(g))
     }
 }
 
@@ -139,7 +140,7 @@ pub fn chi2(inn: &EpochInnovations) -> Decision {
     let mut failed = [false; 3];
     let mut worst: f64 = 0.0;
     for (grp, g) in inn.gamma() {
-        worst = worst.max(g);
+        worst = worst.fmax(g);
         failed[grp] |= g > N_ALPHA_HALF;
     }
     Decision { score: worst / N_ALPHA_HALF, failed }
@@ -156,7 +157,7 @@ pub fn nis(inn: &EpochInnovations) -> Decision {
     };
     // The baro is a separate sensor: its own χ²₁ term and one more degree of freedom.
     let (q, m_all) = match inn.baro {
-        Some((nu, s)) => (q + nu * nu / s.max(1e-12), m + 1),
+        Some((nu, s)) => (q + nu * nu / s.fmax(1e-12), m + 1),
         None => (q, m),
     };
     let gate = if m_all <= 6 { CHI2_999[m_all.clamp(1, 6) - 1] } else { CHI2_999_7 };
@@ -169,7 +170,7 @@ pub fn nis(inn: &EpochInnovations) -> Decision {
         let s3: Matrix3<f64> = inn.s.fixed_view::<3, 3>(3 * g, 3 * g).into_owned();
         quad::<3>(&s3, &[inn.nu[3 * g], inn.nu[3 * g + 1], inn.nu[3 * g + 2]]) > CHI2_999[2]
     };
-    let baro = inn.baro.is_some_and(|(nu, s)| nu * nu / s.max(1e-12) > CHI2_999[0]);
+    let baro = inn.baro.is_some_and(|(nu, s)| nu * nu / s.fmax(1e-12) > CHI2_999[0]);
     Decision { score, failed: [score >= 1.0 && group(0), score >= 1.0 && group(1), score >= 1.0 && baro] }
 }
 
@@ -189,7 +190,7 @@ pub fn gate(inn: &EpochInnovations) -> Decision {
     let mut worst: f64 = 0.0;
     for (grp, g) in inn.gamma() {
         let ratio = g * g / (GATE_SIGMA * GATE_SIGMA);
-        worst = worst.max(ratio);
+        worst = worst.fmax(ratio);
         failed[grp] |= ratio > 1.0;
     }
     Decision { score: worst, failed }
@@ -238,6 +239,7 @@ impl MahaWindow {
     }
 
     /// Ring capacity and indices in range (a restored snapshot may be forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check_shape(&self) -> Result<(), String> {
         let cap = self.ring.len();
         if cap != MAHA_WINDOW || self.head >= cap || self.len > cap {
@@ -325,7 +327,7 @@ pub fn mahalanobis(win: &[MahaWindow; 2], dr: [[f64; 3]; 2], has_vel: bool) -> D
     for g in 0..if has_vel { 2 } else { 1 } {
         let d2 = win[g].d2(dr[g]);
         if d2.is_finite() || d2 == f64::INFINITY {
-            worst = worst.max(d2 / MAHA_D2);
+            worst = worst.fmax(d2 / MAHA_D2);
             failed[g] = d2 > MAHA_D2;
         }
     }
@@ -352,12 +354,12 @@ impl PoolState {
         let score = match self.eval.push(g, mode) {
             Ok(v) if v.is_fault() => {
                 failed[grp] = true;
-                rt.map_or(1.0, |t| (g / t).max(1.0))
+                rt.map_or(1.0, |t| (g / t).fmax(1.0))
             }
             // RT has a continuous ratio; the two-stage methods only have
             // their stages: an anomaly (first stage) scores 0.5.
             Ok(Verdict::Anomaly) => 0.5,
-            Ok(_) => rt.map_or(0.0, |t| (g / t).min(0.99)),
+            Ok(_) => rt.map_or(0.0, |t| (g / t).fmin(0.99)),
             Err(_) => 0.0,
         };
         Decision { score, failed }

@@ -28,6 +28,7 @@
 //! until it falls below `RELEASE_Z`: the position back on its track from
 //! before the ramp, which `returned` reports so the detector re-anchors on
 //! it rather than reading it as a step.
+use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
 use crate::window::{learn_axes, learn_ms, sigma_of, Entry, Window, SPAN_S, TAU_S};
@@ -125,7 +126,7 @@ impl RampTest {
         self.t += dt;
         self.dt = dt;
         let t = self.t;
-        let w = (dt / SMOOTH_S).min(1.0);
+        let w = (dt / SMOOTH_S).fmin(1.0);
         let raw = d;
         let d = match self.smooth {
             Some(p) => core::array::from_fn(|a| p[a] + w * (d[a] - p[a])),
@@ -152,14 +153,14 @@ impl RampTest {
         if self.judging {
             // The return is one jump: read on this fix, not on the smoothing.
             let zr = split(&e0.x, &raw);
-            let z_raw = (zr[0] / self.sigma(0)).max(zr[1] / self.sigma(1));
-            let full = z[0].max(z[1]);
-            if full.min(z_raw) < RELEASE_Z {
+            let z_raw = (zr[0] / self.sigma(0)).fmax(zr[1] / self.sigma(1));
+            let full = z[0].fmax(z[1]);
+            if full.fmin(z_raw) < RELEASE_Z {
                 self.judging = false;
                 self.returned = true;
                 self.window.restart();
                 self.smooth = Some(raw);
-                return full.min(z_raw);
+                return full.fmin(z_raw);
             }
             return full;
         }
@@ -179,9 +180,9 @@ impl RampTest {
                 rec2 += r * r;
             }
             let full = full2.sqrt();
-            let along = along / full.max(1e-9);
+            let along = along / full.fmax(1e-9);
             if along > 0.0 && rec2.sqrt() <= MAX_RATIO * full {
-                full.min(along) / self.sigma(k)
+                full.fmin(along) / self.sigma(k)
             } else {
                 0.0
             }
@@ -207,7 +208,7 @@ impl RampTest {
     pub fn learn(&mut self) {
         let Some(e) = self.pending.take().filter(|_| !self.judging) else { return };
         self.window.enter(e);
-        let w = (self.dt / TAU_S).min(1.0);
+        let w = (self.dt / TAU_S).fmin(1.0);
         if self.dev.is_finite() && self.jump_t != Some(self.t) {
             let usual = if self.dev_ms > 0.0 { self.dev_ms.sqrt() } else { DEV0_M };
             self.dev_ms = learn_ms(self.dev_ms, self.dev, usual, w);

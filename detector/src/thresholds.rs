@@ -94,6 +94,8 @@
 //! results are bit-identical. Input errors are `Err(String)` naming the
 //! parameter and value; nothing panics on bad input.
 
+use crate::MinMax;
+use navguard_logs::decimal::{Fixed, Shortest as S};
 use serde::{Deserialize, Serialize};
 
 /// Largest accepted window (bounds the evaluator's memory).
@@ -168,14 +170,14 @@ fn check_residuals(residuals: &[f64], w: usize) -> Result<(), String> {
         ));
     }
     if let Some(i) = residuals.iter().position(|r| !r.is_finite()) {
-        return Err(format!("residuals[{i}] = {}: must be finite", residuals[i]));
+        return Err(format!("residuals[{i}] = {}: must be finite", S(residuals[i])));
     }
     Ok(())
 }
 
 fn check_psi(psi: f64) -> Result<(), String> {
     if !(psi.is_finite() && psi > 0.0) {
-        return Err(format!("offset psi = {psi}: must be finite and > 0"));
+        return Err(format!("offset psi = {}: must be finite and > 0", S(psi)));
     }
     Ok(())
 }
@@ -257,11 +259,13 @@ pub fn max_window_count(residuals: &[f64], w: usize, rho: f64) -> u32 {
 pub fn normality_model(residuals: &[f64], w: usize, psi: f64) -> Result<NormalityModel, String> {
     check_residuals(residuals, w)?;
     check_psi(psi)?;
-    let chi = residuals.iter().fold(0.0f64, |m, r| m.max(libm::fabs(*r)));
+    let chi = residuals.iter().fold(0.0f64, |m, r| m.fmax(libm::fabs(*r)));
     let ratio = chi / psi;
     if ratio > MAX_REFERENCE_POINTS as f64 {
         return Err(format!(
-            "offset psi = {psi}: chi/psi = {ratio:.0} reference points, more than {MAX_REFERENCE_POINTS}"
+            "offset psi = {}: chi/psi = {} reference points, more than {MAX_REFERENCE_POINTS}",
+            S(psi),
+            Fixed(ratio, 0)
         ));
     }
     // R = ⌊χ/ψ⌋, guarding against r·ψ rounding just above χ.
@@ -271,7 +275,9 @@ pub fn normality_model(residuals: &[f64], w: usize, psi: f64) -> Result<Normalit
     }
     if n_ref == 0 {
         return Err(format!(
-            "offset psi = {psi}: larger than the largest |residual| chi = {chi}, no reference point"
+            "offset psi = {}: larger than the largest |residual| chi = {}, no reference point",
+            S(psi),
+            S(chi)
         ));
     }
     let rho: Vec<f64> = (1..=n_ref).map(|r| r as f64 * psi).collect();
@@ -295,7 +301,7 @@ pub fn kneedle_convex_decreasing(x: &[f64], y: &[f64]) -> Result<usize, String> 
         return Err(format!("kneedle: non-finite value at position {i} of x then y"));
     }
     if let Some(i) = (1..x.len()).find(|&i| x[i] <= x[i - 1]) {
-        return Err(format!("kneedle: x[{i}] = {} not above x[{}] = {}", x[i], i - 1, x[i - 1]));
+        return Err(format!("kneedle: x[{i}] = {} not above x[{}] = {}", S(x[i]), i - 1, S(x[i - 1])));
     }
     if x.len() == 1 {
         return Ok(0);
@@ -347,7 +353,7 @@ pub fn conditional_entropy(joint: [[f64; 2]; 2]) -> Result<f64, String> {
     for (x, row) in joint.iter().enumerate() {
         for (y, &v) in row.iter().enumerate() {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("conditional_entropy: joint[{x}][{y}] = {v}: must be finite and >= 0"));
+                return Err(format!("conditional_entropy: joint[{x}][{y}] = {}: must be finite and >= 0", S(v)));
             }
             total += v;
         }
@@ -410,11 +416,11 @@ pub fn linear_regression(x: &[f64], y: &[f64]) -> Result<(f64, f64), String> {
 pub fn equilibrium(u: f64, a: f64, p: f64, c: f64, x_m: f64) -> Result<f64, String> {
     for (name, v) in [("u", u), ("a", a), ("p", p), ("c", c), ("x_m", x_m)] {
         if !v.is_finite() {
-            return Err(format!("equilibrium: {name} = {v}: must be finite"));
+            return Err(format!("equilibrium: {name} = {}: must be finite", S(v)));
         }
     }
     if u + p <= 1e-12 {
-        return Err(format!("equilibrium: u + p = {u} + {p} must be > 0 (U must fall or D rise with the offset)"));
+        return Err(format!("equilibrium: u + p = {} + {} must be > 0 (U must fall or D rise with the offset)", S(u), S(p)));
     }
     Ok((a + c + p * x_m) / (u + p))
 }
@@ -447,20 +453,21 @@ impl Default for AdaptiveConfig {
 
 impl AdaptiveConfig {
     /// Every parameter in range; the error names it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check(&self) -> Result<(), String> {
         check_w(self.w)?;
         check_psi(self.psi)?;
         if !(self.probe_gain.is_finite() && self.probe_gain > 0.0) {
-            return Err(format!("probe_gain = {}: must be finite and > 0", self.probe_gain));
+            return Err(format!("probe_gain = {}: must be finite and > 0", S(self.probe_gain)));
         }
         if self.probe_len == 0 || self.probe_len > self.w {
             return Err(format!("probe_len = {}: must be in 1..=w = {}", self.probe_len, self.w));
         }
         if !(self.beta.is_finite() && self.beta > 0.0) {
-            return Err(format!("beta = {}: must be finite and > 0", self.beta));
+            return Err(format!("beta = {}: must be finite and > 0", S(self.beta)));
         }
         if !(self.u_floor.is_finite() && (0.0..1.0).contains(&self.u_floor)) {
-            return Err(format!("u_floor = {}: must be in [0, 1)", self.u_floor));
+            return Err(format!("u_floor = {}: must be in [0, 1)", S(self.u_floor)));
         }
         Ok(())
     }
@@ -500,7 +507,7 @@ pub struct AdaptiveThreshold {
 /// Deterministic probe faults on a copy of the training residuals; returns
 /// (probed residuals, labels).
 fn probe(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<(Vec<f64>, Vec<bool>), String> {
-    let chi = residuals.iter().fold(0.0f64, |m, r| m.max(libm::fabs(*r)));
+    let chi = residuals.iter().fold(0.0f64, |m, r| m.fmax(libm::fabs(*r)));
     let amp = cfg.probe_gain * chi;
     let mut x = residuals.to_vec();
     let mut label = vec![false; x.len()];
@@ -532,7 +539,7 @@ pub fn two_stage_offline(residuals: &[f64], w: usize, rho: f64, sigma: f64) -> R
     let mut out: Vec<(bool, bool)> = Vec::with_capacity(residuals.len());
     for &r in residuals {
         if !r.is_finite() {
-            return Err(format!("residual = {r}: must be finite"));
+            return Err(format!("residual = {}: must be finite", S(r)));
         }
         let v = core.push(r, rho, sigma);
         let t = out.len();
@@ -569,9 +576,9 @@ pub fn fit_adaptive(residuals: &[f64], cfg: &AdaptiveConfig) -> Result<AdaptiveT
     if model.x_m() < 2 {
         return Err(format!(
             "offset psi = {}: only {} reference point below chi = {}, need 2 for the regressions",
-            cfg.psi,
+            S(cfg.psi),
             model.x_m(),
-            model.chi
+            S(model.chi)
         ));
     }
     let (probed, label) = probe(residuals, cfg)?;
@@ -712,6 +719,7 @@ impl ThresholdPool {
     }
 
     /// Check a pool (e.g. one deserialised from JSON) before use.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check(&self) -> Result<(), String> {
         check_w(self.w)?;
         if self.modes.is_empty() {
@@ -726,10 +734,10 @@ impl ThresholdPool {
             }
             let (rho, sigma) = m.pair();
             if !(rho.is_finite() && rho >= 0.0) {
-                return Err(format!("mode {k}: threshold rho = {rho}: must be finite and >= 0"));
+                return Err(format!("mode {k}: threshold rho = {}: must be finite and >= 0", S(rho)));
             }
             if self.method != Method::Rt && !(sigma.is_finite() && sigma >= 0.0) {
-                return Err(format!("mode {k}: upper boundary sigma = {sigma}: must be finite and >= 0"));
+                return Err(format!("mode {k}: upper boundary sigma = {}: must be finite and >= 0", S(sigma)));
             }
         }
         Ok(())
@@ -747,12 +755,13 @@ pub struct SpeedBands {
 
 impl SpeedBands {
     /// Bands from finite, strictly increasing edges (m/s).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn new(edges: Vec<f64>) -> Result<Self, String> {
         if let Some(i) = edges.iter().position(|e| !e.is_finite()) {
-            return Err(format!("edges[{i}] = {}: must be finite", edges[i]));
+            return Err(format!("edges[{i}] = {}: must be finite", S(edges[i])));
         }
         if let Some(i) = (1..edges.len()).find(|&i| edges[i] <= edges[i - 1]) {
-            return Err(format!("edges[{i}] = {}: not above edges[{}] = {}", edges[i], i - 1, edges[i - 1]));
+            return Err(format!("edges[{i}] = {}: not above edges[{}] = {}", S(edges[i]), i - 1, S(edges[i - 1])));
         }
         Ok(SpeedBands { edges })
     }
@@ -767,7 +776,7 @@ impl SpeedBands {
     /// The mode of a speed (m/s); an error for a non-finite speed.
     pub fn mode_of(&self, speed: f64) -> Result<usize, String> {
         if !speed.is_finite() {
-            return Err(format!("speed = {speed}: must be finite"));
+            return Err(format!("speed = {}: must be finite", S(speed)));
         }
         Ok(self.edges.iter().take_while(|&&e| speed > e).count())
     }
@@ -790,6 +799,7 @@ struct TwoStage {
 }
 
 impl TwoStage {
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn new(w: usize) -> Result<Self, String> {
         check_w(w)?;
         Ok(TwoStage {
@@ -873,6 +883,7 @@ pub struct Evaluator {
 
 impl Evaluator {
     /// A streaming evaluator over a checked pool.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn new(pool: ThresholdPool) -> Result<Self, String> {
         pool.check()?;
         let core = TwoStage::new(pool.w)?;
@@ -886,6 +897,7 @@ impl Evaluator {
 
     /// The pool validates and the ring buffers match its window (a state
     /// read back from a snapshot may be corrupt or forged).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn check_shape(&self) -> Result<(), String> {
         self.pool.check()?;
         let c = &self.core;
@@ -907,7 +919,7 @@ impl Evaluator {
     pub fn rms_threshold(&self, mode: usize) -> Option<f64> {
         match self.pool.modes.get(mode)? {
             ModeThreshold::Rt(t) if self.core.len < self.core.w => Some(t.mean_rms),
-            ModeThreshold::Rt(_) => Some(libm::sqrt(self.sumsq.max(0.0) / self.core.w as f64)),
+            ModeThreshold::Rt(_) => Some(libm::sqrt(self.sumsq.fmax(0.0) / self.core.w as f64)),
             _ => None,
         }
     }
@@ -915,7 +927,7 @@ impl Evaluator {
     /// Evaluate one residual in operating mode `mode`.
     pub fn push(&mut self, residual: f64, mode: usize) -> Result<Verdict, String> {
         if !residual.is_finite() {
-            return Err(format!("residual = {residual}: must be finite"));
+            return Err(format!("residual = {}: must be finite", S(residual)));
         }
         let n_modes = self.pool.modes.len();
         let Some(m) = self.pool.modes.get(mode) else {

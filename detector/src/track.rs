@@ -17,6 +17,7 @@
 //! The detector also uses it on one axis (the others fed zeros, which stay
 //! at zero departure) for the baro's level: against the GPS altitude (no
 //! velocity to integrate) and against the GPS vertical velocity integrated.
+use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
 /// Time constant of the baseline and of σ, s.
@@ -83,7 +84,7 @@ impl VelocityTrack {
     }
 
     fn sigma(&self, a: usize) -> f64 {
-        self.ms[a].sqrt().max(SIGMA_FLOOR_M)
+        self.ms[a].sqrt().fmax(SIGMA_FLOOR_M)
     }
 
     /// Norm over the axes of `(x − base)/σ`.
@@ -108,7 +109,7 @@ impl VelocityTrack {
             self.base = d;
         }
         self.outlying = 0.0;
-        let w = (dt / TAU_S).max(dt / (self.age + dt)).min(1.0);
+        let w = (dt / TAU_S).fmax(dt / (self.age + dt)).fmin(1.0);
         self.age += dt;
         for a in 0..3 {
             let e = d[a] - self.base[a];

@@ -15,6 +15,7 @@
 //! Their σ are learnt the same way too (`learn_ms`): slowly, from a prior,
 //! winsorised at 3σ, so a fault growing inside the window cannot teach it
 //! its own size.
+use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
 /// The window, true s.
@@ -111,7 +112,7 @@ impl Window {
 /// `sg` stands in), from a change `s`, winsorised at 3σ, with weight `w`.
 pub fn learn_ms(ms: f64, s: f64, sg: f64, w: f64) -> f64 {
     let ms = if ms > 0.0 { ms } else { sg * sg };
-    ms + w * ((s * s).min(9.0 * sg * sg) - ms)
+    ms + w * ((s * s).fmin(9.0 * sg * sg) - ms)
 }
 
 /// σ (m) of a window test's axis: its learnt mean square `ms` (the prior
@@ -119,7 +120,7 @@ pub fn learn_ms(ms: f64, s: f64, sg: f64, w: f64) -> f64 {
 /// `claim` (NaN when it gives none).
 pub fn sigma_of(ms: f64, sigma0: f64, floor: f64, claim: f64) -> f64 {
     let ms = if ms > 0.0 { ms } else { sigma0 * sigma0 };
-    let s = ms.sqrt().max(floor);
+    let s = ms.sqrt().fmax(floor);
     if claim > s { claim } else { s }
 }
 

@@ -10,6 +10,17 @@ use super::LogData;
 use crate::error::{LogError, LogPos};
 use crate::sample::{Sample, COLUMNS};
 
+/// A cell's number: std's parse, or with the feature `compact-floats`
+/// (the core wasm module) the same results through `decimal::parse_f64`,
+/// without std's 10.4 KB table.
+#[inline]
+fn parse_f64(cell: &str) -> Option<f64> {
+    #[cfg(feature = "compact-floats")]
+    return crate::decimal::parse_f64(cell);
+    #[cfg(not(feature = "compact-floats"))]
+    return cell.parse().ok();
+}
+
 /// Incremental navlog CSV parser.
 #[derive(Clone, Debug, Default)]
 pub struct CsvReader {
@@ -106,7 +117,7 @@ impl CsvReader {
             if cell.is_empty() {
                 continue;
             }
-            let v: f64 = cell.parse().map_err(|_| {
+            let v = parse_f64(cell).ok_or_else(|| {
                 LogError::csv(LogPos::Line(ln), COLUMNS.get(*idx).copied(), format!("cannot parse \"{}\" as a number", truncate(cell)))
             })?;
             s.set(*idx, v);

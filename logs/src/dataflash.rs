@@ -65,6 +65,7 @@ use std::collections::BTreeMap;
 
 use crate::extras::{gps_to_unix, EphSource, Extras};
 use crate::{LogData, LogError, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
+use crate::decimal::{Fixed, Shortest};
 use crate::sample::Sample;
 
 const HEAD1: u8 = 0xA3;
@@ -1061,7 +1062,7 @@ impl Out {
                     return;
                 }
                 let vehicle = self.firmware.as_deref().and_then(vehicle_type);
-                mode_name(vehicle, n).map_or_else(|| format!("mode {n}"), str::to_string)
+                mode_name(vehicle, n).map_or_else(|| format!("mode {}", Shortest(n)), str::to_string)
             }
         };
         let t = self.stamp(l, msg);
@@ -1074,8 +1075,8 @@ impl Out {
         if !sub.is_finite() || !code.is_finite() {
             return;
         }
-        let name = err_subsystem(sub).map_or_else(|| format!("subsystem {sub}"), str::to_string);
-        let (level, text) = if code == 0.0 { ("info", format!("ERR {name}: cleared")) } else { ("error", format!("ERR {name}: code {code}")) };
+        let name = err_subsystem(sub).map_or_else(|| format!("subsystem {}", Shortest(sub)), str::to_string);
+        let (level, text) = if code == 0.0 { ("info", format!("ERR {name}: cleared")) } else { ("error", format!("ERR {name}: code {}", Shortest(code))) };
         let t = self.stamp(l, msg);
         self.extras.message(t, level, &text);
     }
@@ -1086,7 +1087,7 @@ impl Out {
         if !id.is_finite() {
             return;
         }
-        let text = event_name(id).map_or_else(|| format!("event {id}"), str::to_string);
+        let text = event_name(id).map_or_else(|| format!("event {}", Shortest(id)), str::to_string);
         let t = self.stamp(l, msg);
         self.extras.message(t, "event", &text);
     }
@@ -1146,7 +1147,7 @@ impl Out {
         };
         meta.push(("time_base".to_string(), base.to_string()));
         let (t0, t1) = self.span.unwrap_or((0.0, 0.0));
-        meta.push(("duration".to_string(), format!("{:.3}", t1 - t0)));
+        meta.push(("duration".to_string(), Fixed(t1 - t0, 3).to_string()));
         meta.push(("messages".to_string(), self.messages.to_string()));
 
         let mut missing = Vec::new();

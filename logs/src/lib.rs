@@ -27,6 +27,7 @@ pub mod error;
 pub mod sample;
 
 pub mod csv;
+pub mod decimal;
 pub mod dataflash;
 pub mod extras;
 pub mod text;

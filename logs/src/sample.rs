@@ -3,6 +3,8 @@
 //! Every field is `f64` and `NaN` means "absent in this row", the same
 //! convention as the columnar JS API, so a row costs no allocation.
 
+use crate::decimal::Shortest;
+
 /// A navlog row. Units follow the contract: s, deg, m, m/s, m/s², rad/s.
 ///
 /// Its methods are `#[inline]`: the detector's row path calls them, and
@@ -249,7 +251,7 @@ impl Sample {
     /// calls it only for a row its fast check refused, for the message.
     pub fn first_invalid(&self) -> Option<(&'static str, String)> {
         if !self.t.is_finite() {
-            return Some(("t", format!("required and must be finite, got {}", self.t)));
+            return Some(("t", format!("required and must be finite, got {}", Shortest(self.t))));
         }
         for (i, name) in COLUMNS.iter().enumerate() {
             let v = self.get(i);
@@ -258,7 +260,7 @@ impl Sample {
             }
             let (lo, hi) = range_of(i);
             if !v.is_finite() || v < lo || v > hi {
-                return Some((name, format!("value {v} outside [{lo}, {hi}]")));
+                return Some((name, format!("value {} outside [{}, {}]", Shortest(v), Shortest(lo), Shortest(hi))));
             }
         }
         for g in GROUPS_ALL_OR_NONE {

@@ -60,6 +60,7 @@ use std::rc::Rc;
 
 use super::extras::{EphSource, Extras};
 use super::{LogData, LogError, LogSummary, NoRows, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
+use crate::decimal::{Fixed, Shortest};
 use crate::sample::Sample;
 
 /// First 7 header bytes of every ULog file ("ULog" + 0x01 0x12 0x35).
@@ -525,7 +526,9 @@ struct Template {
     min: usize,
     full: usize,
     ts: Loc,
-    role: Role,
+    /// Shared with the subscriptions made from it: a cache hit copies a
+    /// pointer, not the maps (a deep clone was 1.9 KB of wasm).
+    role: Rc<Role>,
 }
 
 impl Defs {
@@ -568,7 +571,7 @@ impl Defs {
                 min: l.min,
                 full: l.full,
                 ts,
-                role: role_for(name, &l),
+                role: Rc::new(role_for(name, &l)),
             })
         });
         self.cached_failure |= t.is_none();
@@ -828,7 +831,7 @@ struct Sub {
     full: usize,
     /// `timestamp`, read in s (µs / 1e6).
     ts: Loc,
-    role: Role,
+    role: Rc<Role>,
 }
 
 // ---------------------------------------------------------------------------
@@ -1111,7 +1114,7 @@ impl Parser {
             return;
         }
         let Some(plan) = self.plan else {
-            match &sub.role {
+            match &*sub.role {
                 Role::Gps(GpsSrc::VehicleGpsPosition, _) => self.seen.vgp = true,
                 Role::Gps(GpsSrc::SensorGps, _) => self.seen.sensor_gps = true,
                 Role::Baro(BaroSrc::AirData, _) => self.seen.air = true,
@@ -1120,7 +1123,7 @@ impl Parser {
             }
             return;
         };
-        match &sub.role {
+        match &*sub.role {
             Role::Other => {}
             Role::Gps(src, m) => {
                 // vehicle_gps_position (the selected receiver) when it has data.
@@ -1189,7 +1192,7 @@ impl Parser {
                 let n = val(Some(*loc), d);
                 if n.is_finite() {
                     let name = NAV_STATES.get(n as usize).filter(|s| n >= 0.0 && !s.is_empty());
-                    self.extras.mode(t, name.map_or_else(|| format!("nav_state {n}"), |s| (*s).to_string()));
+                    self.extras.mode(t, name.map_or_else(|| format!("nav_state {}", Shortest(n)), |s| (*s).to_string()));
                 }
             }
         }
@@ -1226,7 +1229,7 @@ impl Parser {
                 self.topics.len() - 1
             }
         };
-        let role = if multi_id == 0 { tpl.role } else { Role::Other };
+        let role = if multi_id == 0 { tpl.role } else { Rc::new(Role::Other) };
         let sub = Sub {
             topic,
             min: tpl.min,
@@ -1327,7 +1330,7 @@ impl Parser {
         truncate_utf8(&mut text, MAX_INFO_BYTES);
         self.log_lines.push((
             "log".to_string(),
-            format!("t={t:.3}s {name}: {text}"),
+            format!("t={}s {name}: {text}", Fixed(t, 3)),
         ));
     }
 
@@ -1345,7 +1348,7 @@ impl Parser {
         } else {
             0.0
         };
-        meta.push(("duration_s".to_string(), format!("{duration:.3}")));
+        meta.push(("duration_s".to_string(), Fixed(duration, 3).to_string()));
         meta.append(&mut self.info);
         if !self.multi_info_keys.is_empty() {
             meta.push((
@@ -1400,9 +1403,9 @@ impl Parser {
 
         if self.dropouts > 0 {
             warnings.push(format!(
-                "{} logging dropouts, {:.3} s of data lost in total",
+                "{} logging dropouts, {} s of data lost in total",
                 self.dropouts,
-                self.dropout_ms as f64 * 1e-3
+                Fixed(self.dropout_ms as f64 * 1e-3, 3)
             ));
         }
         let counted = [
@@ -1469,7 +1472,7 @@ fn key_value(p: &[u8]) -> Option<(&str, String)> {
             if v.is_nan() && !b.is_float() {
                 return None; // value bytes missing
             }
-            v.to_string()
+            Shortest(v).to_string()
         }
     };
     Some((name, text))

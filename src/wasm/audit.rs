@@ -1,17 +1,16 @@
-//! Whole-log audits (`auditBytes`, `Auditor`, `StreamAuditor`), the log
-//! readers (`readLog`) and `metrics`. Core module.
+//! Whole-log audits (`auditBytes`, `Auditor`, `StreamAuditor`) and
+//! `metrics`. Audit module (feature `wasm-audit`): its own copy of the
+//! detector and the readers, loaded on first use, so that the core module
+//! (`new Detector()` plus `readLog`) does not carry the audit's code.
 
 use js_sys::{Float64Array, Object, Uint8Array};
 use wasm_bindgen::prelude::*;
 
-use super::detector::stats_object;
-use super::interop::{self as js_in, array_of, config_from, err, set, string_pairs, strings, Obj, MAX_BYTES, MAX_VALUES};
+use super::interop::{self as js_in, array_of, config_from, err, set, stats_object, string_pairs, strings, Obj, MAX_BYTES, MAX_VALUES};
 use crate::logs::extras::EphSource;
 use crate::audit;
-use crate::detector::column_of_rows;
 use crate::logs;
 use crate::metrics;
-use crate::sample::COLUMNS;
 
 #[wasm_bindgen(typescript_custom_section)]
 const TS_AUDIT: &'static str = r#"
@@ -36,7 +35,6 @@ export interface AuditReport {
 }
 /** Residual columns: GPS position N/E/D (m), velocity N/E/D (m/s), baro (m); NaN on rows without that measurement. */
 export interface AuditResult { report: AuditReport; columns: { t: Float64Array; status: Uint8Array; f: Float64Array; r: Float64Array; c: Float64Array; kind: Uint8Array; rPn: Float64Array; rPe: Float64Array; rPd: Float64Array; rVn: Float64Array; rVe: Float64Array; rVd: Float64Array; rBaro: Float64Array } }
-export interface LogColumns { format: string; rows: number; columns: Partial<Record<keyof NavSample, Float64Array>>; warnings: string[]; missing: string[]; meta: [string, string][]; topicCounts: [string, number][] }
 "#;
 
 /// One fault interval as JS sees it (`peakOffset` absent for an outage).
@@ -269,30 +267,6 @@ impl StreamAuditor {
     }
 }
 
-/// Parse a log into columns (for plotting): `{ format, columns: {name: Float64Array}, warnings, missing, meta }`.
-#[wasm_bindgen(js_name = readLog, unchecked_return_type = "LogColumns")]
-pub fn read_log(#[wasm_bindgen(unchecked_param_type = "Uint8Array")] bytes: &JsValue) -> Result<JsValue, JsError> {
-    let bytes = js_in::bytes(bytes, MAX_BYTES, "readLog: bytes").map_err(err)?;
-    let log = logs::read_any(&bytes)?;
-    let cols = Object::new();
-    let mut buf = Vec::new();
-    for (i, name) in COLUMNS.iter().enumerate() {
-        if column_of_rows(&log.samples, i, &mut buf) {
-            set(&cols, name, &Float64Array::from(&buf[..]).into());
-        }
-    }
-    let topics = array_of(&log.topic_counts, |(k, n)| js_sys::Array::of2(&JsValue::from_str(k), &JsValue::from_f64(*n as f64)).into());
-    Ok(Obj::new()
-        .s("format", log.format)
-        .n("rows", log.samples.len() as f64)
-        .v("warnings", &strings(&log.warnings))
-        .v("missing", &strings(&log.missing))
-        .v("meta", &string_pairs(&log.meta))
-        .v("topicCounts", &topics)
-        .v("columns", &cols.into())
-        .done())
-}
-
 /// Metrics over labelled rows (contract definitions).
 #[wasm_bindgen(unchecked_return_type = "Metrics")]
 pub fn metrics(
@@ -311,3 +285,10 @@ pub fn metrics(
     Ok(metrics_object(&metrics::compute(t, label, status)))
 }
 
+
+/// Bytes of this module's wasm linear memory; the package's
+/// `wasmMemoryBytes()` adds them to the core's once this module is loaded.
+#[wasm_bindgen(js_name = __wasmMemoryBytes)]
+pub fn wasm_memory_bytes() -> f64 {
+    (core::arch::wasm32::memory_size(0) * 65536) as f64
+}

@@ -4,9 +4,10 @@
 use js_sys::{Array, Object, Uint8Array};
 use wasm_bindgen::prelude::*;
 
-use super::interop::{self as js_in, err, set, Obj, MAX_BYTES};
+use super::interop::{self as js_in, err, set, stats_object, Obj, MAX_BYTES};
 use crate::config::Config;
-use crate::detector::{row_from_values, rows_from_columns, Detector as CoreDetector, Output, OutputColumns, Stats};
+use crate::detector::{row_from_values, rows_from_columns, Detector as CoreDetector, Output, OutputColumns};
+use crate::logs::decimal::Shortest;
 use crate::sample::{Sample, COLUMNS};
 
 thread_local! {
@@ -31,20 +32,6 @@ fn output_row(o: &Output) -> [f64; 7] {
 /// One push result as JS sees it: `{ t, status, f, r, c, kind, gpsEpoch }`.
 fn output_object(o: &Output) -> Result<JsValue, JsError> {
     Ok(Obj::new().n("t", o.t).n("status", o.status as f64).n("f", o.f).n("r", o.r).n("c", o.c).n("kind", o.kind as f64).b("gpsEpoch", o.gps_epoch).done())
-}
-
-/// The detector's counters as JS sees them (camelCase, like the rest of the API).
-pub(super) fn stats_object(s: &Stats) -> JsValue {
-    Obj::new()
-        .n("rows", s.rows as f64)
-        .n("gpsEpochs", s.gps_epochs as f64)
-        .n("imuRows", s.imu_rows as f64)
-        .n("baroRows", s.baro_rows as f64)
-        .n("retrains", s.retrains as f64)
-        .n("filterResets", s.filter_resets as f64)
-        .n("dataGaps", s.data_gaps as f64)
-        .n("filterErrors", s.filter_errors as f64)
-        .done()
 }
 
 /// The checked config as JS sees it: the fields of `Config` as they are
@@ -271,7 +258,7 @@ impl Detector {
                     Some(e) => err(format!("{e} (batch index {j})")),
                     None => {
                         let t = self.rows.get(k).map_or(f64::NAN, |s| s.t);
-                        err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, t, last_t))
+                        err(format!("row {}: field 't': time goes backwards: {} after {} (batch index {j})", base + j as u64, Shortest(t), Shortest(last_t)))
                     }
                 });
             }

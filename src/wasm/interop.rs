@@ -27,6 +27,7 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
 use crate::config::Data;
+use crate::logs::decimal::Shortest;
 
 #[wasm_bindgen]
 extern "C" {
@@ -95,7 +96,7 @@ pub fn own_keys(obj: &JsValue, what: &str) -> Result<Vec<String>, String> {
 /// and messages name them so; non-finite numbers are an error (JSON has none).
 fn number(x: f64, path: &str) -> Result<Data, String> {
     if !x.is_finite() {
-        return Err(format!("{path}: must be a finite number, got {x}"));
+        return Err(format!("{path}: must be a finite number, got {}", Shortest(x)));
     }
     let integral = x.fract() == 0.0 && x.abs() < 9.0e15 && !(x == 0.0 && x.is_sign_negative());
     Ok(match (integral, x >= 0.0) {
@@ -193,7 +194,7 @@ fn array_len(v: &JsValue, what: &str, max: usize) -> Result<usize, String> {
     let len = get(v, &JsValue::from_str("length"), what)?;
     match len.as_f64() {
         Some(n) if n >= 0.0 && n.fract() == 0.0 && n <= max as f64 => Ok(n as usize),
-        Some(n) if n >= 0.0 && n.fract() == 0.0 => Err(format!("{what}: length {n} exceeds the limit of {max}")),
+        Some(n) if n >= 0.0 && n.fract() == 0.0 => Err(format!("{what}: length {} exceeds the limit of {max}", Shortest(n))),
         _ => Err(format!("{what}: length must be a non-negative integer")),
     }
 }
@@ -207,7 +208,7 @@ fn typed_len<T: JsCast>(v: &JsValue, max: usize, what: &str, kind: &str) -> Resu
     }
     let len = v.unchecked_ref::<Typed>().checked_length().map_err(|_| format!("{what}: must be a {kind}"))?;
     if len > max as f64 {
-        return Err(format!("{what}: {len} elements exceed the limit of {max} per call"));
+        return Err(format!("{what}: {} elements exceed the limit of {max} per call", Shortest(len)));
     }
     Ok(len as usize)
 }
@@ -539,4 +540,18 @@ pub fn strings(items: &[String]) -> JsValue {
 /// `(key, value)` pairs as a JS array of two-element arrays.
 pub fn string_pairs(items: &[(String, String)]) -> JsValue {
     array_of(items, |(k, v)| Array::of2(&JsValue::from_str(k), &JsValue::from_str(v)).into())
+}
+
+/// The detector's counters as JS sees them (camelCase, like the rest of the API).
+pub fn stats_object(s: &crate::detector::Stats) -> JsValue {
+    Obj::new()
+        .n("rows", s.rows as f64)
+        .n("gpsEpochs", s.gps_epochs as f64)
+        .n("imuRows", s.imu_rows as f64)
+        .n("baroRows", s.baro_rows as f64)
+        .n("retrains", s.retrains as f64)
+        .n("filterResets", s.filter_resets as f64)
+        .n("dataGaps", s.data_gaps as f64)
+        .n("filterErrors", s.filter_errors as f64)
+        .done()
 }

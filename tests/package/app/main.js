@@ -1,8 +1,10 @@
 // A browser app as a user writes it: `import … from 'navguard'`, bundled
 // with no configuration (esbuild, Vite) and run in headless Chromium by
 // tests/package/package.test.mjs. It reads /log (a real flight log served
-// by the test), runs both push paths, an audit, the guards, then the lab.
-import init, { Detector, readLog, auditBytes, columnNames, loadLab, loadedModules } from 'navguard';
+// by the test), runs both push paths (recording the wasm bytes compiled for
+// `new Detector()` plus `readLog`: the core module alone), an audit (the
+// audit module, after `await loadAudit()`), the guards, then the lab.
+import init, { Detector, readLog, auditBytes, columnNames, loadAudit, loadLab, loadedModules } from 'navguard';
 import * as ng from 'navguard';
 
 async function run() {
@@ -36,6 +38,14 @@ async function run() {
   out.pushSame = same;
   out.pushN = n;
   out.flagged = flagged;
+  out.firstUse = loadedModules();
+  out.wasmBytesFirstUse = globalThis.__wasmBytes;
+  try {
+    auditBytes(bytes);
+  } catch (e) {
+    out.auditBeforeLoad = e.message;
+  }
+  await loadAudit();
   const a = auditBytes(bytes);
   out.auditRows = a.report.rows;
   out.statsKeys = Object.keys(a.report.stats).sort();
