@@ -1643,6 +1643,8 @@ impl Withheld {
 /// onto its levels): what the baro's windows, its Δr reference and the
 /// filter's baro offset hold is the fault's, so they restart, and the baro
 /// is fed again.
+#[cfg_attr(navguard_cold_size, optimize(size))]
+#[inline(never)]
 fn restart_baro(kf: Option<&mut Kf>, ind: &mut IndicatorEngine, withheld: &mut Withheld, last_est: &mut LastEstimate) {
     ind.reset_axis(6);
     ind.clear_baro();
@@ -2372,6 +2374,8 @@ impl Detector {
     /// hold is the fault's, so they restart, and the baro is fed again (its
     /// return jump, 27 m on battery tune #224, otherwise stayed in the
     /// 6 s windows and was flagged for 6 s after the fault).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     fn baro_revived(&mut self) {
         restart_baro(self.kf.as_mut(), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
     }

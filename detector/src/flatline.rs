@@ -24,6 +24,7 @@
 //! twice; old PX4 logs that copy the baro into every 250 Hz
 //! `sensor_combined` row repeat 74% of their samples, 12 in a row (50 ms):
 //! `p` learns each.
+use navguard_logs::decimal::Shortest;
 use serde::{Deserialize, Serialize};
 
 /// The call: a run this unlikely under the learnt repeat share, as a
@@ -107,7 +108,8 @@ impl Flatline {
         if self.run == 0 || !(self.t1 - self.t0 >= MIN_S) {
             return 0.0;
         }
-        (2.0 * f64::from(self.run) * (1.0 / self.share()).ln()).sqrt()
+        // libm's log: the same bits natively and in wasm.
+        libm::sqrt(2.0 * f64::from(self.run) * libm::log(1.0 / self.share()))
     }
 
     /// The current run has been called stuck.
@@ -127,6 +129,8 @@ impl Flatline {
     }
 
     /// A restored state is usable: counts finite, `0 ≤ k ≤ n ≤ HORIZON`.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     pub fn check(&self) -> Result<(), String> {
         if self.k.is_finite()
             && self.n.is_finite()
@@ -136,10 +140,7 @@ impl Flatline {
         {
             Ok(())
         } else {
-            Err(format!(
-                "baro flatline: counts k {} n {} out of range",
-                self.k, self.n
-            ))
+            Err(format!("baro flatline: counts k {} n {} out of range", Shortest(self.k), Shortest(self.n)))
         }
     }
 }

@@ -391,6 +391,9 @@ pub struct IndicatorEngine {
     imu: LagTest<2>,
     /// The same on the vertical axis.
     imu_v: LagTest<1>,
+    /// At the last IMU observation the vertical test's statistic was the
+    /// larger (see `imu_recent`).
+    imu_v_leads: bool,
     /// Baro against the GPS altitude (`z = baro − alt` per GPS epoch): the
     /// baro group's R is capped by it, so the baro is condemned only when it
     /// departs from the GPS altitude as well as from the filter and the
@@ -688,13 +691,6 @@ impl<const D: usize> LagTest<D> {
         f64::NAN
     }
 
-    /// The statistic of the last `push` (NaN when it had none).
-    pub fn last_stat(&self) -> f64 {
-        let scale = (self.last_dt / self.span).fmax(1.0).sqrt();
-        let z2: f64 = (0..D).map(|a| (self.last_s[a] / (self.sigma(a) * scale)).powi(2)).sum();
-        (z2 / D as f64).sqrt()
-    }
-
     /// Windows learnt from so far.
     pub fn learnt(&self) -> u32 {
         self.learnt
@@ -920,6 +916,7 @@ impl IndicatorEngine {
             baro_gps: LagTest::new(BARO_CAP, BARO_SPAN, BARO_GPS_SIGMA0, BARO_GPS_FLOOR, BARO_ALPHA, BARO_TAU, true).with_allowance(BARO_ALLOWANCE),
             baro_gps_pending: f64::NAN,
             imu: LagTest::new(IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true),
+            imu_v_leads: false,
             imu_v: LagTest::new(IMU_V_CAP, IMU_V_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true),
             baro_pending: f64::NAN,
             imu_pending: f64::NAN,
@@ -1131,6 +1128,7 @@ impl IndicatorEngine {
         // 28 false alarms after the fault in `tests/scenarios.rs`, 13-17
         // with the horizontal alone).
         let v = if self.imu_v.learnt() >= IMU_ARM_WINDOWS { v } else { f64::NAN };
+        self.imu_v_leads = v > h;
         let st = h.fmax(v);
         if st.is_finite() {
             self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.fmax(st) } else { st };
@@ -1149,8 +1147,7 @@ impl IndicatorEngine {
     /// the episode outlived the fault by a second (`tests/scenarios.rs`).
     pub fn imu_recent(&self, dt: f64) -> f64 {
         let h = self.imu.recent(dt);
-        let leads = self.imu_v.learnt() >= IMU_ARM_WINDOWS && one_axis_as_two(self.imu_v.last_stat()) > self.imu.last_stat();
-        if leads {
+        if self.imu_v_leads {
             h.fmax(one_axis_as_two(self.imu_v.recent(dt)))
         } else {
             h
@@ -1219,6 +1216,8 @@ impl IndicatorEngine {
     }
 
     /// Close the epoch: push pending sums and compute R and C.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
     pub fn close_epoch(&mut self) -> Indicators {
         if !self.pending_any {
             return self.last;
@@ -1615,7 +1614,7 @@ mod codec_impls {
     impl_codec!(Indicators { r, c, r_group, c_group, inc_group, pv, baro_cons, imu, r_imu });
     impl_codec!(AxisState { prev, r_ref, p_ref, p_peak, ms, last_r, has_prev, has_ref, learnt });
     impl_codec!(IndicatorSettings { window, floor, initial, alpha });
-    impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, imu_v, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded });
+    impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, imu_v, imu_v_leads, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded });
     impl_codec!(PvTest { ring, head, len, sum, since_resum, ms, ms_u, last_u, inc, inc_len, inc_head, inc_cap, stat, learnt_u, learnt_s });
     impl_codec!(LagTest<const D: usize> { ring, motion, allow, head, len, span, ms, floor, alpha, hold, rate, tau, t_rate, last_s, last_dt, last_t, learnt, fast_start });
 }
