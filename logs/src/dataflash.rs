@@ -1712,19 +1712,7 @@ mod tests {
 
     // ---- Robustness ------------------------------------------------------
 
-    /// xorshift64*: deterministic, dependency-free.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-        }
-        fn below(&mut self, n: usize) -> usize {
-            (self.next() % n.max(1) as u64) as usize
-        }
-    }
+    use crate::TestRng as Rng;
 
     #[test]
     fn truncation_at_many_offsets_never_panics() {
@@ -1756,8 +1744,8 @@ mod tests {
             } else {
                 PLANE.to_vec()
             };
-            for _ in 0..1 + rng.below(40) {
-                let i = rng.below(buf.len());
+            for _ in 0..1 + rng.index(40) {
+                let i = rng.index(buf.len());
                 if let Some(b) = buf.get_mut(i) {
                     *b = rng.next() as u8;
                 }
@@ -1768,10 +1756,10 @@ mod tests {
         for _ in 0..30 {
             let mut buf: Vec<u8> = (0..4000).map(|_| rng.next() as u8).collect();
             for _ in 0..200 {
-                let i = rng.below(buf.len() - 3);
+                let i = rng.index(buf.len() - 3);
                 buf[i] = HEAD1;
                 buf[i + 1] = HEAD2;
-                buf[i + 2] = if rng.below(2) == 0 {
+                buf[i + 2] = if rng.index(2) == 0 {
                     FMT_TYPE
                 } else {
                     rng.next() as u8

@@ -821,19 +821,7 @@ pub fn fixed_text(x: f64, frac_digits: usize) -> String {
 mod tests {
     use super::parse_f64;
 
-    /// A small deterministic generator (xorshift64*).
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-        }
-        fn below(&mut self, n: u64) -> u64 {
-            self.next() % n
-        }
-    }
+    use crate::TestRng as Rng;
 
     /// Same result as std's, bit for bit (NaN's sign included), or both refuse.
     fn same(s: &str) -> bool {
