@@ -323,10 +323,9 @@ const RAMP_R_SCALE: f64 = 2.8 / crate::ramp::RAMP_Z;
 /// (`flatline::Z` just above the boundary).
 const FLAT_R_SCALE: f64 = 2.8 / flatline::Z;
 /// A baro jump seen on both levels: they moved by the same amount, within
-/// this share of the jump and within `NEAR_SIGMAS` of the Doppler level's
+/// this share of the jump and within `track::NEAR` times the Doppler level's
 /// σ (the GPS altitude's own noise at that epoch is in the difference).
 const BARO_JUMP_AGREE: f64 = 0.3;
-const NEAR_SIGMAS: f64 = 2.5;
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
 const RECOVER_INC: f64 = 2.0;
@@ -1235,7 +1234,7 @@ impl Consistency {
         match (self.baro_gps_level.offset(0), self.baro_dop_level.offset(0)) {
             (Some((g, gp, _)), Some((d, dp, sd))) => {
                 let (jg, jd) = (g - gp, d - dp);
-                (jd - jg).abs() < BARO_JUMP_AGREE * jg.abs() && (jd - jg).abs() < NEAR_SIGMAS * sd
+                (jd - jg).abs() < BARO_JUMP_AGREE * jg.abs() && (jd - jg).abs() < crate::track::NEAR * sd
             }
             _ => false,
         }

@@ -34,7 +34,9 @@ const LEARN_SIGMAS: f64 = 3.0;
 /// A return: `d` was outside `FAR` σ before the jump and inside `NEAR` σ
 /// after it (norm over the three axes of `(d − base)/σ`).
 const FAR: f64 = 5.0;
-const NEAR: f64 = 2.5;
+/// Within this many σ of its baseline a level is back (also the detector's
+/// bound on a baro jump seen on both levels, `Consistency::baro_returned`).
+pub const NEAR: f64 = 2.5;
 /// Outlying this long, the baseline is re-learnt from the current `d`, s:
 /// a receiver whose track moved for good (a re-acquisition) is not judged
 /// against its old one for the rest of the flight.
