@@ -27,7 +27,7 @@ fn main() {
         }
         if o.gps_epoch {
             let i = det.indicators();
-            println!("{:8.2} lab {} st {} k {} drv {} f {:5.2} r {:6.2} rg {:6.2} {:6.2} {:6.2}", s.t, s.label, o.status, o.kind, o.driver, o.f, o.r, i.r_group[0], i.r_group[1], i.r_group[2]);
+            println!("{:8.2} lab {} st {} k {} drv {} f {:5.2} r {:6.2} rg {:6.2} {:6.2} {:6.2} imu {:5.2} rimu {:5.2} pv {:5.2}", s.t, s.label, o.status, o.kind, o.driver, o.f, o.r, i.r_group[0], i.r_group[1], i.r_group[2], i.imu, i.r_imu, i.pv);
         }
     }
 }
