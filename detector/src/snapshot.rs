@@ -62,8 +62,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// 13: their statistics are no longer kept between epochs. 14: the
 /// horizontal drag-off's end confirmation (`dragend::DragEnd`), the
 /// vehicle-upset gate (`kind::UPSET`) and the IMU's sample interval. 15:
-/// the baro's flatline test (`flatline::Flatline`).
-pub const VERSION: u32 = 15;
+/// the baro's flatline test (`flatline::Flatline`). 16: the position's
+/// ramp test knows a restart from its first start (`ramp::RampTest`).
+pub const VERSION: u32 = 16;
 
 #[derive(Clone)]
 struct Header {

@@ -448,7 +448,7 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
     }, null, { timeout: 5000 });
     const snapText = await page.textContent('#live-snap');
     assert.match(snapText, /^\d+\.\d KiB · format v15 · navguard \d+\.\d+\.\d+/);
-    assert.ok(before.info.bytes > 10000 && before.info.version === 15, JSON.stringify(before.info));
+    assert.ok(before.info.bytes > 10000 && before.info.version === 16, JSON.stringify(before.info));
     await page.waitForFunction(() => /^\d\d:\d\d:\d\d · [\d,]+ rows · [2-9]\d* saves$/.test(document.querySelector('#live-saved').textContent), null, { timeout: 5000 });
     await page.screenshot({ path: join(artifacts, 'page-live.png'), fullPage: true });
 
