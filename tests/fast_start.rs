@@ -73,3 +73,39 @@ fn the_position_velocity_test_waits_for_its_sigma() {
         assert!(pct < now, "{split:?} #{i}: flagged {pct:.2}% of its GPS epochs (was {before}%)");
     }
 }
+
+/// No fault is called before σ_Δ has learnt from `WARMUP_EPOCHS` (8)
+/// consecutive differences on every position axis: battery tune #3
+/// (aggressive, 10 Hz white GPS σ 1.9 m, no fault in its first 180 s)
+/// had its first 6 GPS epochs flagged at R 3–16 against the 0.3 m prior
+/// (tune: 311 false-positive epochs in the logs' first 30 s, 73 with the
+/// warm-up). A step after the warm-up is still flagged at once.
+#[test]
+fn the_first_differences_call_no_fault() {
+    let f = Flight::draw(Split::Tune, 3);
+    assert!(f.faults.iter().all(|ft| ft.start > 60.0));
+    let rows = battery::simulate(&f);
+    let mut det = navguard::Detector::new(Config::default()).unwrap();
+    let first: Vec<u8> = rows.iter().filter_map(|s| det.push(s).ok().filter(|o| o.gps_epoch).map(|o| o.status)).take(20).collect();
+    assert_eq!(first, vec![0; 20]);
+    // A 30 m north step from the 15th fix on (after the warm-up): flagged
+    // from its first epoch (and to the end of the flight's first 25 fixes
+    // after it).
+    let mut det = navguard::Detector::new(Config::default()).unwrap();
+    let mut n = 0;
+    let mut flagged = vec![];
+    for s in &rows {
+        let mut s = *s;
+        if !s.label.is_nan() {
+            n += 1;
+            if n >= 15 {
+                s.lat += (30.0 / 6_371_000.0_f64).to_degrees();
+            }
+        }
+        let o = det.push(&s).unwrap();
+        if o.gps_epoch && (15..19).contains(&n) {
+            flagged.push(o.status);
+        }
+    }
+    assert_eq!(flagged, vec![1; 4]);
+}

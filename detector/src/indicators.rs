@@ -1166,6 +1166,12 @@ impl IndicatorEngine {
         self.imu.learnt()
     }
 
+    /// Fewest consecutive differences σ_Δ has learnt from over the GPS
+    /// position axes.
+    pub fn position_learnt(&self) -> u32 {
+        self.axes[..3].iter().map(|a| a.learnt).min().unwrap_or(0)
+    }
+
     /// Fold (or not) the IMU consistency into the velocity group's R.
     pub fn set_imu_fold(&mut self, on: bool) {
         self.imu_fold = on;

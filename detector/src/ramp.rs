@@ -79,6 +79,12 @@ pub struct RampTest {
     /// The receiver's claims (horizontal, vertical), m; NaN when none.
     claim: [f64; 2],
     judging: bool,
+    /// The arm that called the ramp being judged (0 horizontal, 1
+    /// vertical): its return ends it, whatever the other axis wandered
+    /// meanwhile (battery tune #148 with dropped records: a vertical ramp's
+    /// return held 1.5 s longer while the horizontal `d`, judged on the
+    /// same raw fix, sat above the release from the 87 s hold).
+    arm: usize,
     returned: bool,
     /// Learnt mean square of a fix's distance from the smoothed track
     /// (m²; 0 before any), and that distance at the last epoch.
@@ -108,6 +114,25 @@ impl RampTest {
         *self = RampTest { ms, dev_ms, restarted, ..RampTest::default() };
     }
 
+    /// This fix jumped (see `JUMP_Z`) from the smoothed track `before` it
+    /// back against the change called on arm `k` since the window's start
+    /// `e0`, by at least half of it: the ramp's end. Its start may lie
+    /// before `e0` (the call came late: a jump in the window held it, as
+    /// dropped records do), so the jump may take back more than the change
+    /// judged (battery tune #148 with 1.2 s of records dropped every 20 s:
+    /// called 27 m into a vertical ramp, back 73 m in one fix).
+    fn jumped_back(&self, k: usize, e0: &[f64; 3], before: Option<[f64; 3]>, raw: &[f64; 3]) -> bool {
+        let (Some(b), true) = (before, self.jump_t == Some(self.t)) else { return false };
+        let axes: &[usize] = if k == 0 { &[0, 1] } else { &[2] };
+        let (mut along, mut called2) = (0.0, 0.0);
+        for &a in axes {
+            let c = b[a] - e0[a];
+            along -= (raw[a] - b[a]) * c;
+            called2 += c * c;
+        }
+        called2 > 0.0 && along >= 0.5 * called2
+    }
+
     /// A jump lies inside the window ending now.
     fn jumped(&self) -> bool {
         self.jump_t.is_some_and(|tj| self.t - tj < SPAN_S + 2.0 * SMOOTH_S)
@@ -134,6 +159,7 @@ impl RampTest {
         let t = self.t;
         let w = (dt / SMOOTH_S).fmin(1.0);
         let raw = d;
+        let before = self.smooth;
         let d = match self.smooth {
             Some(p) => core::array::from_fn(|a| p[a] + w * (d[a] - p[a])),
             None => d,
@@ -158,10 +184,10 @@ impl RampTest {
         let z: [f64; 2] = core::array::from_fn(|k| self.last[k] / self.sigma(k));
         if self.judging {
             // The return is one jump: read on this fix, not on the smoothing.
-            let zr = split(&e0.x, &raw);
-            let z_raw = (zr[0] / self.sigma(0)).fmax(zr[1] / self.sigma(1));
-            let full = z[0].fmax(z[1]);
-            if full.fmin(z_raw) < RELEASE_Z {
+            let k = self.arm.min(1);
+            let z_raw = split(&e0.x, &raw)[k] / self.sigma(k);
+            let full = z[k];
+            if full.fmin(z_raw) < RELEASE_Z || self.jumped_back(k, &e0.x, before, &raw) {
                 self.judging = false;
                 self.returned = true;
                 self.window.restart();
@@ -201,8 +227,10 @@ impl RampTest {
         // on #510003) and the battery's vertical ramps are caught (tune:
         // ramp-v misdetection 0.909 -> 0.679, F2 0.713 -> 0.726, clean
         // flights 0.23% unchanged; no shared real log changes).
-        let stat = ramp(0).fmax(ramp(1));
+        let (h, v) = (ramp(0), ramp(1));
+        let stat = h.fmax(v);
         self.judging = stat >= RAMP_Z;
+        self.arm = usize::from(v > h);
         stat
     }
 
@@ -300,6 +328,24 @@ mod tests {
     }
 
     #[test]
+    fn a_ramp_called_late_ends_on_its_jump_back() {
+        // 0.8 m/s down from 100 s to 160 s, then back in one jump; a 10 m
+        // spike at 110 s keeps the call off until it leaves the window, so
+        // the window's start lies 11 m into the ramp and the jump back
+        // lands 11 m beyond it.
+        let f = |t: f64| {
+            let spike = if (110.0..110.1).contains(&t) { 10.0 } else { 0.0 };
+            spike + if (100.0..160.0).contains(&t) { 0.8 * (t - 100.0) } else { 0.0 }
+        };
+        let mut r = RampTest::default();
+        let (s, back) = run_axis(&mut r, 1500, f64::NAN, 2, &f);
+        let first = s.iter().position(|x| *x >= RAMP_Z).expect("never called");
+        assert!((140.0..150.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
+        assert_eq!(back, vec![800]);
+        assert!(s[801..].iter().all(|x| !(*x >= RAMP_Z)));
+    }
+
+    #[test]
     fn a_step_is_not_a_ramp() {
         // A 20 m jump at 100 s that stays: the smoothing's rise after it
         // is not read as a ramp.
@@ -343,5 +389,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, judging, returned, dev_ms, dev, jump_t, restarted });
+    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, judging, arm, returned, dev_ms, dev, jump_t, restarted });
 }
