@@ -61,8 +61,6 @@
 //! carry no scale in their format character. Multi-instance GPS/IMU/BARO
 //! only use instance 0. Attitude is not interpolated.
 
-use std::collections::BTreeMap;
-
 use crate::extras::{gps_to_unix, EphSource, Extras};
 use crate::{LogData, LogError, LogSummary, Reorder, RowSink, Window, FEED_CHUNK, REORDER_ROWS};
 use crate::decimal::{Fixed, Shortest};
@@ -773,7 +771,11 @@ struct Out {
     last_gps_t: Option<f64>,
     /// Boot time of the last mapped message, for GPS without a boot clock.
     last_boot_t: Option<f64>,
-    counts_by_name: BTreeMap<String, u64>,
+    /// Messages by name, in name order (as a `BTreeMap` iterates them):
+    /// a sorted `Vec` searched by bisection, so the core wasm module
+    /// carries no B-tree code (3 KB). A name is inserted once (at most
+    /// [`MAX_NAMES`] + 1 of them), found in O(log n) at every later flush.
+    counts_by_name: Vec<(String, u64)>,
     counts: Vec<u64>,
     messages: u64,
     n_gps: u64,
@@ -864,8 +866,16 @@ impl Out {
     fn flush_count(&mut self, ty: u8, name: &str) {
         if let Some(c) = self.counts.get_mut(usize::from(ty)) {
             if *c > 0 {
-                let key = if self.counts_by_name.len() < MAX_NAMES || self.counts_by_name.contains_key(name) { name } else { "(other)" };
-                *self.counts_by_name.entry(key.to_string()).or_default() += *c;
+                let find = |k: &str| self.counts_by_name.binary_search_by(|(n, _)| n.as_str().cmp(k));
+                let key = if self.counts_by_name.len() < MAX_NAMES || find(name).is_ok() { name } else { "(other)" };
+                match find(key) {
+                    Ok(i) => {
+                        if let Some(e) = self.counts_by_name.get_mut(i) {
+                            e.1 += *c;
+                        }
+                    }
+                    Err(i) => self.counts_by_name.insert(i, (key.to_string(), *c)),
+                }
                 *c = 0;
             }
         }
@@ -1189,7 +1199,7 @@ impl Out {
             meta,
             warnings: self.warnings,
             missing,
-            topic_counts: self.counts_by_name.into_iter().collect(),
+            topic_counts: self.counts_by_name,
             extras,
         })
     }

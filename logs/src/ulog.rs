@@ -504,11 +504,8 @@ struct Defs {
     formats: HashMap<String, (Rc<Vec<Field>>, usize)>,
     /// Bytes of the `F` payloads in `formats`.
     format_bytes: usize,
-    /// Size (bytes) of each resolved nested type; None = unresolvable.
-    sizes: HashMap<String, Option<usize>>,
-    /// Per-topic subscription template (layout + role for multi_id 0), so
-    /// that repeated `A` messages for one topic cost a hash look-up.
-    templates: HashMap<String, Option<Template>>,
+    /// Cached results by type or topic name ([`Memo`]).
+    memo: HashMap<String, Memo>,
     /// Some cached result is None (maybe a forward reference).
     cached_failure: bool,
     /// Field visits spent on layouts so far, and the current allowance.
@@ -518,6 +515,19 @@ struct Defs {
     dropped: u64,
     /// Subscriptions not resolved because the layout budget ran out.
     over_budget: u64,
+}
+
+/// What [`Defs`] has worked out for one name: `None` until asked. One map
+/// for both (one hash table's code in the core wasm module, not two).
+#[derive(Default)]
+struct Memo {
+    /// Size (bytes) of the type of this name as a nested type; `Some(None)`
+    /// = unresolvable.
+    size: Option<Option<usize>>,
+    /// Subscription template of the topic of this name (layout + role for
+    /// multi_id 0), so that repeated `A` messages for one topic cost a hash
+    /// look-up; `Some(None)` = unresolvable.
+    template: Option<Option<Template>>,
 }
 
 /// What an `A` message for a topic resolves to (see [`Sub`]).
@@ -550,15 +560,14 @@ impl Defs {
         // later subscription always gets the current layout. The budget in
         // `template` keeps a hostile F/A/F/A... file linear.
         if old.is_some() || self.cached_failure {
-            self.sizes.clear();
-            self.templates.clear();
+            self.memo.clear();
             self.cached_failure = false;
         }
     }
 
     /// Subscription template of topic `name` (cached).
     fn template(&mut self, name: &str) -> Option<Template> {
-        if let Some(t) = self.templates.get(name) {
+        if let Some(t) = self.memo.get(name).and_then(|m| m.template.as_ref()) {
             return t.clone();
         }
         if self.work > self.allow {
@@ -575,8 +584,13 @@ impl Defs {
             })
         });
         self.cached_failure |= t.is_none();
-        self.templates.insert(name.to_string(), t.clone());
+        self.remember(name).template = Some(t.clone());
         t
+    }
+
+    /// The memo of `name`, made empty if there is none yet.
+    fn remember(&mut self, name: &str) -> &mut Memo {
+        self.memo.entry(name.to_string()).or_default()
     }
 
     /// Size in bytes of a basic or nested type. Memoised so that adversarial
@@ -585,8 +599,8 @@ impl Defs {
         if let Some(b) = Basic::parse(ty) {
             return Some(b.size());
         }
-        if let Some(s) = self.sizes.get(ty) {
-            return *s;
+        if let Some(s) = self.memo.get(ty).and_then(|m| m.size) {
+            return s;
         }
         let fields = Rc::clone(&self.formats.get(ty)?.0);
         let mut total = Some(0usize);
@@ -601,7 +615,7 @@ impl Defs {
                 .and_then(|s| s.checked_mul(f.len))
                 .and_then(|s| t.checked_add(s));
         }
-        self.sizes.insert(ty.to_string(), total);
+        self.remember(ty).size = Some(total);
         self.cached_failure |= total.is_none();
         total
     }
