@@ -18,6 +18,9 @@ const artifacts = join(repoRoot, 'tests', 'artifacts');
 const LOITER = join(repoRoot, '..', 'shared', 'data', 'ardupilot', 'Loiter_RTL.bin');
 const CHROMIUM = process.env.CHROMIUM_PATH || '/usr/bin/chromium';
 const { chromium } = createRequire(import.meta.url)(join(repoRoot, 'node_modules', 'playwright-core'));
+// The snapshot format this source writes (`VERSION` in
+// detector/src/snapshot.rs): the page shows what the build reports.
+const SNAPSHOT_FORMAT = Number((await readFile(join(repoRoot, 'detector', 'src', 'snapshot.rs'), 'utf8')).match(/pub const VERSION: u32 = (\d+);/)[1]);
 
 const MIME = {
   '.html': 'text/html; charset=utf-8',
@@ -447,8 +450,8 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
       return h.info && text.startsWith(`${(h.info.bytes / 1024).toFixed(1)} KiB · format v${h.info.version} · `);
     }, null, { timeout: 5000 });
     const snapText = await page.textContent('#live-snap');
-    assert.match(snapText, /^\d+\.\d KiB · format v15 · navguard \d+\.\d+\.\d+/);
-    assert.ok(before.info.bytes > 10000 && before.info.version === 16, JSON.stringify(before.info));
+    assert.match(snapText, new RegExp(`^\\d+\\.\\d KiB · format v${SNAPSHOT_FORMAT} · navguard \\d+\\.\\d+\\.\\d+`));
+    assert.ok(before.info.bytes > 10000 && before.info.version === SNAPSHOT_FORMAT, JSON.stringify(before.info));
     await page.waitForFunction(() => /^\d\d:\d\d:\d\d · [\d,]+ rows · [2-9]\d* saves$/.test(document.querySelector('#live-saved').textContent), null, { timeout: 5000 });
     await page.screenshot({ path: join(artifacts, 'page-live.png'), fullPage: true });
 
@@ -468,7 +471,7 @@ test('live session: snapshot kept in IndexedDB, resumed after a reload and conti
     const offer = await page.textContent('#live-resume');
     const hhmmss = new Date(saved.savedAt).toLocaleTimeString('en-GB', { hour12: false });
     assert.equal(offer, `Resume live session (saved ${hhmmss}, ${saved.rowCount.toLocaleString('en-US')} rows, ${saved.stats.retrains} ${saved.stats.retrains === 1 ? 'retrain' : 'retrains'})`);
-    assert.match(await page.textContent('#live-offer-detail'), new RegExp(`next row ${saved.nextRow.toLocaleString('en-US')} of 12,500 · snapshot [\\d.]+ KiB, format v15`));
+    assert.match(await page.textContent('#live-offer-detail'), new RegExp(`next row ${saved.nextRow.toLocaleString('en-US')} of 12,500 · snapshot [\\d.]+ KiB, format v${SNAPSHOT_FORMAT}`));
     assert.equal(await page.$eval('#live-panel', (e) => e.hidden), true);
 
     await page.click('#live-resume');
