@@ -25,9 +25,10 @@
 //! receiver does not call the fix degraded (the detector's side). Once
 //! called, the window's start
 //! is held (no entry is added) and the ramp is judged on the full change
-//! until it falls below `RELEASE_Z`: the position back on its track from
-//! before the ramp, which `returned` reports so the detector re-anchors on
-//! it rather than reading it as a step.
+//! of the arm that called it until it falls below `RELEASE_Z`, or until a
+//! fix jumps back by at least half of it (`jumped_back`): the position
+//! back on its track from before the ramp, which `returned` reports so the
+//! detector re-anchors on it rather than reading it as a step.
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 

@@ -63,7 +63,8 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// horizontal drag-off's end confirmation (`dragend::DragEnd`), the
 /// vehicle-upset gate (`kind::UPSET`) and the IMU's sample interval. 15:
 /// the baro's flatline test (`flatline::Flatline`). 16: the position's
-/// ramp test knows a restart from its first start (`ramp::RampTest`).
+/// ramp test knows a restart from its first start and which arm called
+/// (`ramp::RampTest`).
 pub const VERSION: u32 = 16;
 
 #[derive(Clone)]
