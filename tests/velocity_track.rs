@@ -125,7 +125,12 @@ fn a_baro_step_met_in_a_gps_episode_is_judged_against_the_level_before_it() {
     assert_eq!(f.faults[0].kind.name(), "baro-step");
     let r = battery::run(&f, &Config::default()).unwrap();
     let share = r.events[0].share;
-    assert!(share >= 0.9, "{:.0}% of the step flagged", 100.0 * share);
+    // 104 of its 117 epochs (89%) since the baro levels learn their error
+    // per unit of motion (session 10; 116 before): the model learnt over
+    // the seconds before the step explains part of the level's departure
+    // by this aggressive flight's manoeuvres, and 12 epochs at 115-135 s
+    // fall from R 2.53-3.06 to 2.27-2.46, under the boundary.
+    assert!(share >= 0.85, "{:.0}% of the step flagged", 100.0 * share);
     // 10 before the baro tests' motion allowance, 11 with it (the step's
     // end, at 170 s, meets a manoeuvre); 60 before the levels went on.
     let n = flagged_after(&f, 60.0);

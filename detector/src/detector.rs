@@ -51,7 +51,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
-use crate::drift::{DriftTest, Motion};
+use crate::drift::{DriftTest, Motion, K_CLIMB, K_DYN};
 use crate::ramp::RampTest;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
 use crate::frames::Anchor;
@@ -1196,6 +1196,9 @@ impl Consistency {
         self.baro_dop_level.step(dt, [b, 0.0, 0.0], [v1, 0.0, 0.0], [v0, 0.0, 0.0]);
         let level = [self.baro_gps_level.level(), self.baro_dop_level.level()];
         let motion = Motion { speed2: v.map_or(f64::NAN, |v| v[0] * v[0] + v[1] * v[1]), climb: v1, height: -y[2] };
+        for lv in [&mut self.baro_gps_level, &mut self.baro_dop_level] {
+            lv.set_motion([motion.speed2, motion.climb]);
+        }
         self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv)
     }
 
@@ -1384,7 +1387,8 @@ impl Consistency {
         // The baro's level: condemned only when it left both references
         // (NaN, not judged, unless both are); and its drift over a long
         // window, against both (see `drift`).
-        let (to_gps, to_doppler) = (self.baro_gps_level.departure(), self.baro_dop_level.departure());
+        let allow = [K_DYN, K_CLIMB];
+        let (to_gps, to_doppler) = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
         let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
         out.fold(2, dep.fmax(drift * DRIFT_R_SCALE));
         // The baro's reading held bit for bit while it still arrives (a

@@ -64,8 +64,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// vehicle-upset gate (`kind::UPSET`) and the IMU's sample interval. 15:
 /// the baro's flatline test (`flatline::Flatline`). 16: the position's
 /// ramp test knows a restart from its first start and which arm called
-/// (`ramp::RampTest`).
-pub const VERSION: u32 = 16;
+/// (`ramp::RampTest`). 17: the tracks carry the motion and the baro
+/// levels' error model (`track::VelocityTrack`).
+pub const VERSION: u32 = 17;
 
 #[derive(Clone)]
 struct Header {

@@ -59,6 +59,17 @@ pub struct VelocityTrack {
     outlying: f64,
     /// The last interval's length, s.
     dt: f64,
+    /// The motion at this fix (horizontal speed² (m/s)², climb m/s; NaN
+    /// when unknown) and its mean over the epochs the baseline learnt
+    /// from, with the baseline's weights: what a one-axis baro level's
+    /// healthy error follows (see `departure_net`).
+    motion: [f64; 2],
+    motion_base: [f64; 2],
+    /// Moments of the motion's deviation `x` from its mean and of the
+    /// first axis' `d − base` (`y`), with the baseline's weights: `x xᵀ`
+    /// (xx₀₀, xx₀₁, xx₁₁) and `x y`. The level's own error model.
+    mxx: [f64; 3],
+    mxy: [f64; 2],
 }
 
 impl VelocityTrack {
@@ -109,6 +120,7 @@ impl VelocityTrack {
         }
         if self.outlying >= RELEARN_S {
             self.base = d;
+            self.motion_base = self.motion;
         }
         self.outlying = 0.0;
         let w = (dt / TAU_S).fmax(dt / (self.age + dt)).fmin(1.0);
@@ -118,6 +130,72 @@ impl VelocityTrack {
             self.base[a] += w * e;
             self.ms[a] += w * (e * e - self.ms[a]);
         }
+        let x = self.deviation();
+        if x.iter().all(|v| v.is_finite()) {
+            let y = d[0] - self.base[0];
+            for (m, v) in self.mxx.iter_mut().zip([x[0] * x[0], x[0] * x[1], x[1] * x[1]]) {
+                *m += w * (v - *m);
+            }
+            for (m, v) in self.mxy.iter_mut().zip([x[0] * y, x[1] * y]) {
+                *m += w * (v - *m);
+            }
+        }
+        for k in 0..2 {
+            let m = self.motion[k];
+            if m.is_finite() {
+                let b = self.motion_base[k];
+                self.motion_base[k] = if b.is_finite() { b + w * (m - b) } else { m };
+            }
+        }
+    }
+
+    /// The motion's deviation from its mean over the baseline.
+    fn deviation(&self) -> [f64; 2] {
+        [self.motion[0] - self.motion_base[0], self.motion[1] - self.motion_base[1]]
+    }
+
+    /// The motion at this fix (see `motion`).
+    pub fn set_motion(&mut self, motion: [f64; 2]) {
+        self.motion = motion;
+    }
+
+    /// `departure` with the first axis' `d` net of the level's own error
+    /// model: its learnt error per unit of the motion's deviation from
+    /// the mean motion over the baseline (`error_model`, bounded by `k[0]`
+    /// m per (m/s)² of speed² and `k[1]` m per m/s of climb; a part
+    /// unknown now moves nothing). A baro's healthy error follows the
+    /// motion (dynamic pressure, prop-wash), and a level learnt in calmer
+    /// flight read a faster leg's as a departure: battery tune #60 and
+    /// #105 (aggressive, 10 Hz) had 50 and 54 false-positive epochs so,
+    /// now 0; #133 16 → 1, #137 27 → 37.
+    pub fn departure_net(&self, k: [f64; 2]) -> f64 {
+        let c = self.error_model(k);
+        let x = self.deviation();
+        let moved: f64 = (0..2).map(|i| if x[i].is_finite() { c[i] * x[i] } else { 0.0 }).sum();
+        match self.d {
+            Some(mut d) if self.age >= MIN_AGE_S => {
+                d[0] -= moved;
+                self.z(&d) / FAR
+            }
+            _ => f64::NAN,
+        }
+    }
+
+    /// The level's error per unit of motion deviation, least squares over
+    /// the moments with a ridge that keeps each coefficient near 0 until
+    /// the data outweighs a prior spread of its bound `k[i]` (the moments
+    /// are means over about `TAU_S` of fixes, so the prior weighs as one
+    /// of them), and clamped to ±`k[i]`.
+    fn error_model(&self, k: [f64; 2]) -> [f64; 2] {
+        let fixes = (self.age.fmin(TAU_S) / self.dt.fmax(1e-3)).fmax(1.0);
+        let var = self.ms[0].fmax(SIGMA_FLOOR_M * SIGMA_FLOOR_M) / fixes;
+        let (a, b, d) = (self.mxx[0] + var / (k[0] * k[0]), self.mxx[1], self.mxx[2] + var / (k[1] * k[1]));
+        let det = a * d - b * b;
+        if !(det > 0.0) {
+            return [0.0; 2];
+        }
+        let c = [(d * self.mxy[0] - b * self.mxy[1]) / det, (a * self.mxy[1] - b * self.mxy[0]) / det];
+        [c[0].clamp(-k[0], k[0]), c[1].clamp(-k[1], k[1])]
     }
 
     /// The last fix's jump off the track is the truth coming back (the end
@@ -175,6 +253,9 @@ impl VelocityTrack {
     /// The baseline of axis `a` moves to this fix's `d`: what remains after
     /// a fault's end is the receiver's slow wander, not the fault.
     pub fn rebase_axis(&mut self, a: usize) {
+        if a == 0 {
+            self.motion_base = self.motion;
+        }
         if let (Some(d), true) = (self.d, a < 3) {
             self.base[a] = d[a];
             self.outlying = 0.0;
@@ -241,6 +322,35 @@ mod tests {
         assert!(!run(&mut tr, 1100, 300, &step).iter().any(|r| *r));
     }
 
+    /// A one-axis baro level whose healthy error follows the speed²
+    /// (0.012 m per (m/s)², inside the 0.02 bound) learns it over a survey
+    /// at 2–8 m/s; a later 16 m/s dash moves the level 2.6 m, which the
+    /// plain departure reads as beyond `FAR` σ and the net one does not,
+    /// while a 6 m step during the dash still departs net of the model.
+    #[test]
+    fn a_level_learns_its_error_per_unit_of_motion() {
+        const K: [f64; 2] = [0.02, 1.0];
+        let speed2 = |t: f64| if t < 400.0 { (5.0 + 3.0 * (t / 9.5).sin()).powi(2) } else { 256.0 };
+        let level = |t: f64, extra: f64| 0.012 * speed2(t) + 0.3 * (t / 3.7).sin() + extra;
+        let mut tr = VelocityTrack::default();
+        let dt = 0.2;
+        let (mut net, mut plain) = (0.0_f64, 0.0_f64);
+        for i in 0..2050 {
+            let t = i as f64 * dt;
+            tr.set_motion([speed2(t), 0.0]);
+            tr.step(dt, [level(t, 0.0), 0.0, 0.0], [0.0; 3], [0.0; 3]);
+            if t > 400.0 {
+                net = net.max(tr.departure_net(K));
+                plain = plain.max(tr.departure());
+            }
+            tr.learn();
+        }
+        assert!(net < 0.5 && plain > 1.0, "net {net:.2}, plain {plain:.2}");
+        tr.set_motion([speed2(410.0), 0.0]);
+        tr.step(dt, [level(410.0, 6.0), 0.0, 0.0], [0.0; 3], [0.0; 3]);
+        assert!(tr.departure_net(K) > 1.0, "{:.2}", tr.departure_net(K));
+    }
+
     /// After a drag-off's end (rebased), the fixes at the new level are the
     /// track: a later jump back to the drag's level is not a "return".
     #[test]
@@ -286,5 +396,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt });
+    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy });
 }
