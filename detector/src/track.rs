@@ -159,7 +159,7 @@ impl VelocityTrack {
         self.motion = motion;
     }
 
-    /// `departure` with the first axis' `d` net of the level's own error
+    /// `departure_by` with the first axis' `d` net of the level's own error
     /// model: its learnt error per unit of the motion's deviation from
     /// the mean motion over the baseline (`error_model`, bounded by `k[0]`
     /// m per (m/s)² of speed² and `k[1]` m per m/s of climb; a part
@@ -172,13 +172,7 @@ impl VelocityTrack {
         let c = self.error_model(k);
         let x = self.deviation();
         let moved: f64 = (0..2).map(|i| if x[i].is_finite() { c[i] * x[i] } else { 0.0 }).sum();
-        match self.d {
-            Some(mut d) if self.age >= MIN_AGE_S => {
-                d[0] -= moved;
-                self.z(&d) / FAR
-            }
-            _ => f64::NAN,
-        }
+        self.departure_by(moved)
     }
 
     /// The level's error per unit of motion deviation, least squares over
@@ -231,12 +225,15 @@ impl VelocityTrack {
         Some(core::array::from_fn(|a| d[a] - p[a]))
     }
 
-    /// How far `d` sits from its learnt baseline: its σ-normalised distance
-    /// (the axes combined) over `FAR`, so 1 at `FAR` σ. NaN until the
-    /// baseline has lived `MIN_AGE_S`.
-    pub fn departure(&self) -> f64 {
+    /// How far `d`, its first axis less `moved` m, sits from its learnt
+    /// baseline: its σ-normalised distance (the axes combined) over `FAR`,
+    /// so 1 at `FAR` σ. NaN until the baseline has lived `MIN_AGE_S`.
+    fn departure_by(&self, moved: f64) -> f64 {
         match self.d {
-            Some(d) if self.age >= MIN_AGE_S => self.z(&d) / FAR,
+            Some(mut d) if self.age >= MIN_AGE_S => {
+                d[0] -= moved;
+                self.z(&d) / FAR
+            }
             _ => f64::NAN,
         }
     }
@@ -341,7 +338,7 @@ mod tests {
             tr.step(dt, [level(t, 0.0), 0.0, 0.0], [0.0; 3], [0.0; 3]);
             if t > 400.0 {
                 net = net.max(tr.departure_net(K));
-                plain = plain.max(tr.departure());
+                plain = plain.max(tr.departure_by(0.0));
             }
             tr.learn();
         }
