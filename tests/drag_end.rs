@@ -21,3 +21,20 @@ fn the_end_of_a_horizontal_drag_off_is_confirmed_and_re_anchored() {
     let (n, of) = flagged_after(&f, 30.0);
     assert!(of > 100 && n * 10 <= of, "{n} of {of} epochs flagged in the 30 s after the drag-off");
 }
+
+/// Regression: tune #599 (aggressive, 10 Hz white receiver σ 0.47 m, 50 Hz
+/// consumer IMU): a 13.5 m step for 9 s passed the drag-off end's test 2 s
+/// after its onset (the manoeuvre moved the velocity's mean), so the filter
+/// re-anchored onto the stepped fix. The step's end then jumped back by
+/// the offset the confirmation had accepted, and was judged as a new step
+/// until the next fault 37 s later (every epoch of the 30 s after it). A
+/// confirmed drag-off end now keeps its offset like a coasted-out episode
+/// (`Episode::accepted`): a later jump that undoes it ends that fault.
+#[test]
+fn a_step_taken_for_a_drag_off_end_is_undone_by_its_own_end() {
+    let f = Flight::draw(Split::Tune, 599);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("step", Axis::Horizontal));
+    assert!(f.faults[1].start_log > f.faults[0].end_log + 30.0);
+    let (n, of) = flagged_after(&f, 30.0);
+    assert!(of > 250 && n * 20 <= of, "{n} of {of} epochs flagged in the 30 s after the step");
+}

@@ -2474,6 +2474,13 @@ impl Detector {
             restart_baro(Some(&mut *kf), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
         }
         let drag_end = self.consistency.drag_ended(fix.t, self.episode.active);
+        if drag_end {
+            // The confirmation can take a step's onset for a drag-off's end
+            // (a manoeuvre moved the velocity's mean; battery tune #599): the
+            // offset re-anchored onto is kept like a coasted-out episode's,
+            // so the step's own end undoes it instead of opening a new one.
+            self.episode.accepted = Some(res.pin.nu);
+        }
         // An upset vehicle (see `kind::UPSET`): nothing is judged, and the
         // filter re-anchors at every epoch until it is over.
         let upset = fix.t <= self.upset_until;
