@@ -1797,6 +1797,7 @@ impl Episode {
     /// releases every group.
     fn step(&mut self, t: f64, fault: bool, ev: &Evidence, max_coast: f64, oracle: bool) -> EpisodeStep {
         if !fault {
+            self.ended_off_track(ev);
             self.normal_epoch();
             return EpisodeStep { fault: false, reset: false };
         }
@@ -1816,6 +1817,26 @@ impl Episode {
             self.accepted = Some(ev.res.pin.nu);
         }
         EpisodeStep { fault: !ended, reset: coasted_out || ended }
+    }
+
+    /// A position-only episode closed by a normal verdict while the fix
+    /// is still `RETURN_MIN_SIGMAS` σ off the coasted filter: the verdict's
+    /// windows let a persisting step pass (battery tune #599: a 6.4 m step
+    /// under a 0.47 m receiver, flagged for one epoch), and the filter
+    /// will follow it. Its offset is kept like a coasted-out episode's, so
+    /// the step's own end undoes it instead of opening a new episode.
+    fn ended_off_track(&mut self, ev: &Evidence) {
+        if !self.withheld.gps_pos() || self.receiver_lost || self.imu {
+            return;
+        }
+        // σ along the offset: a step on one axis is judged by that axis'
+        // noise, not by the three axes' together.
+        let nu = ev.res.pin.nu;
+        let len2: f64 = nu.iter().map(|x| x * x).sum();
+        let sigma2: f64 = (0..3).map(|a| nu[a] * nu[a] * ev.sigma_pos[a] * ev.sigma_pos[a]).sum::<f64>() / len2;
+        if len2 > RETURN_MIN_SIGMAS * RETURN_MIN_SIGMAS * sigma2 {
+            self.accepted = Some(nu);
+        }
     }
 
     /// How long the episode may coast, s: an IMU-only coast (the whole

@@ -7,7 +7,12 @@ use navguard::{Config, Detector};
 /// GPS epochs flagged in the `len` s after the flight's first fault ends,
 /// and the GPS epochs in that span (default config).
 pub fn flagged_after(f: &Flight, len: f64) -> (usize, usize) {
-    let ft = f.faults[0];
+    flagged_after_fault(f, 0, len)
+}
+
+/// As `flagged_after`, after the flight's fault `i`.
+pub fn flagged_after_fault(f: &Flight, i: usize, len: f64) -> (usize, usize) {
+    let ft = f.faults[i];
     let mut det = Detector::new(Config::default()).unwrap();
     let after: Vec<u8> = battery::simulate(f)
         .iter()
