@@ -97,7 +97,10 @@ fn the_ardupilot_logs_clock_rate_agrees_with_pymavlink() {
 /// The plane's first fast leg flagged 11.7% of the flight before its clock
 /// was learnt from motion (at ~340 s); 8.1% since its 10 Hz IMU no longer
 /// judges the GPS (session 8), the rest being the clock's ramp in the
-/// position tests.
+/// position tests; 0.67% since session 11, when an episode that closes
+/// with the fix still far off the coasted filter keeps that offset, so
+/// the ramp's returns no longer open 60 s episodes. With the receiver's
+/// time it is 0.06%.
 #[test]
 fn the_planes_fast_legs_are_no_longer_flagged_for_its_clock() {
     let path = format!("{}/../shared/data/ardupilot/erle_plane_4-12-2014_329.BIN", env!("CARGO_MANIFEST_DIR"));
@@ -105,7 +108,7 @@ fn the_planes_fast_legs_are_no_longer_flagged_for_its_clock() {
     let (ep, _) = verdicts(&log.samples);
     let (ep0, _) = verdicts(&without_gps_time(&log.samples));
     let (now, before) = (flagged_share(&ep), flagged_share(&ep0));
-    assert!(now < 0.01 && before > 0.05, "flagged {:.2}% with gps_time, {:.2}% without", 100.0 * now, 100.0 * before);
+    assert!(now < 0.001 && before > 0.005, "flagged {:.2}% with gps_time, {:.2}% without", 100.0 * now, 100.0 * before);
 }
 
 /// The battery writes `gps_time` (receiver time = epoch + true time, to the
