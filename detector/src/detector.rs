@@ -302,6 +302,12 @@ const RETURN_MIN_SIGMAS: f64 = 6.0;
 /// ...and, along the offset's direction, between these shares of it (a
 /// return to where the GPS was before, up to the coast's drift).
 const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
+/// An episode that ends with the fix this many σ_Δ (along the offset)
+/// off the coasted filter keeps the offset (`Episode::ended_off_track`).
+/// Lower than `RETURN_MIN_SIGMAS`: keeping one only lets a later jump
+/// that undoes it end a fault, and a 15.6 m vertical step under a 1 Hz
+/// receiver is 5.4 σ_Δ (battery tune #551).
+const KEEP_MIN_SIGMAS: f64 = 4.0;
 /// s: time constant of the learnt accelerometer noise.
 const IMU_PSD_TAU: f64 = 2.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
@@ -1157,7 +1163,14 @@ impl Consistency {
         // Asked first: a remembered offset is forgotten once undone, even
         // when the track also says the fault ended.
         let undone = episode.undone(res);
-        if undone || self.track.returned() {
+        if undone {
+            // The track's baseline learnt the fault while it was accepted
+            // (battery tune #551: a 15.6 m vertical step for 117 s): the
+            // return is the truth, so the baseline moves with it.
+            self.track.rebase();
+            return true;
+        }
+        if self.track.returned() {
             return true;
         }
         let dragged = usual && res.drag_returned(self.flight_time, self.track.jump(), sigma_dv);
@@ -1812,6 +1825,9 @@ impl Episode {
         let ended = !oracle && (self.recovered(t - start, ev, oracle) || returned);
         if returned {
             self.accepted = None;
+        } else if ended {
+            // Recovered with the fix still off: see `ended_off_track`.
+            self.ended_off_track(ev);
         }
         if coasted_out && !ended && self.withheld.gps_pos() && !self.receiver_lost && !self.imu {
             self.accepted = Some(ev.res.pin.nu);
@@ -1819,12 +1835,14 @@ impl Episode {
         EpisodeStep { fault: !ended, reset: coasted_out || ended }
     }
 
-    /// A position-only episode closed by a normal verdict while the fix
-    /// is still `RETURN_MIN_SIGMAS` σ off the coasted filter: the verdict's
-    /// windows let a persisting step pass (battery tune #599: a 6.4 m step
-    /// under a 0.47 m receiver, flagged for one epoch), and the filter
-    /// will follow it. Its offset is kept like a coasted-out episode's, so
-    /// the step's own end undoes it instead of opening a new episode.
+    /// A position-only episode that ended (a normal verdict, or recovered)
+    /// while the fix is still `RETURN_MIN_SIGMAS` σ off the coasted filter:
+    /// the verdict's windows let a persisting step pass (battery tune #599:
+    /// a 6.4 m step under a 0.47 m receiver, flagged for one epoch), or the
+    /// recovery took it for the filter's drift (tune #551: a 15.6 m
+    /// vertical step, recovered 7 s in), and the filter follows it. Its
+    /// offset is kept like a coasted-out episode's, so the step's own end
+    /// undoes it instead of opening a new episode.
     fn ended_off_track(&mut self, ev: &Evidence) {
         if !self.withheld.gps_pos() || self.receiver_lost || self.imu {
             return;
@@ -1834,7 +1852,7 @@ impl Episode {
         let nu = ev.res.pin.nu;
         let len2: f64 = nu.iter().map(|x| x * x).sum();
         let sigma2: f64 = (0..3).map(|a| nu[a] * nu[a] * ev.sigma_pos[a] * ev.sigma_pos[a]).sum::<f64>() / len2;
-        if len2 > RETURN_MIN_SIGMAS * RETURN_MIN_SIGMAS * sigma2 {
+        if len2 > KEEP_MIN_SIGMAS * KEEP_MIN_SIGMAS * sigma2 {
             self.accepted = Some(nu);
         }
     }
@@ -1875,6 +1893,7 @@ impl Episode {
     /// coasted-out position episode re-anchored onto: the fault it stopped
     /// judging ended. Forgets the offset once undone.
     fn undone(&mut self, res: &Residuals) -> bool {
+        if std::env::var("NG_DBG").is_ok() { eprintln!("UNDONE? acc={:.2?} nu={:.2?}", self.accepted, res.pin.nu); }
         let back = self.accepted.is_some_and(|off| undoes(&res.pin.nu, &off, 0.0));
         if back {
             self.accepted = None;
