@@ -152,10 +152,19 @@ fn main() -> Result<(), String> {
             .iter()
             .flat_map(|r| r.events.iter().map(move |e| serde_json::json!({ "flight": r.flight.index, "seed": r.flight.seed, "event": e })))
             .collect();
+        // Per flight: the confusion counts over its labelled GPS epochs, so
+        // two runs can be compared flight by flight.
+        let per_flight: Vec<serde_json::Value> = results
+            .iter()
+            .map(|r| {
+                let count = |flagged: bool, faulty: bool| r.epochs.iter().filter(|e| !e.label.is_nan() && (e.status != 0) == flagged && (e.label != 0.0) == faulty).count();
+                serde_json::json!({ "flight": r.flight.index, "tp": count(true, true), "fp": count(true, false), "fn": count(false, true), "tn": count(false, false) })
+            })
+            .collect();
         let v = serde_json::json!({
             "split": a.split.name(), "start": a.start, "flights": a.flights, "method": a.cfg.method.name(),
             "overall": overall, "tables": tables, "events": events, "checks": checks, "imuRate": imu,
-            "rows": rows, "seconds": secs,
+            "rows": rows, "seconds": secs, "perFlight": per_flight,
         });
         println!("{v}");
         return Ok(());
