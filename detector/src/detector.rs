@@ -1893,7 +1893,6 @@ impl Episode {
     /// coasted-out position episode re-anchored onto: the fault it stopped
     /// judging ended. Forgets the offset once undone.
     fn undone(&mut self, res: &Residuals) -> bool {
-        if std::env::var("NG_DBG").is_ok() { eprintln!("UNDONE? acc={:.2?} nu={:.2?}", self.accepted, res.pin.nu); }
         let back = self.accepted.is_some_and(|off| undoes(&res.pin.nu, &off, 0.0));
         if back {
             self.accepted = None;
@@ -2512,6 +2511,10 @@ impl Detector {
         let baro_back = !self.oracle && (self.episode.active || verdict.fault) && self.consistency.baro_returned();
         if baro_back {
             restart_baro(Some(&mut *kf), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
+            // The drift window's start may sit on the fault's level (one
+            // learnt from the flight's first seconds, see
+            // `VelocityTrack::back_to_origin`).
+            self.consistency.baro_drift.clear();
         }
         let drag_end = self.consistency.drag_ended(fix.t, self.episode.active);
         if drag_end {

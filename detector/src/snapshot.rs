@@ -65,8 +65,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// the baro's flatline test (`flatline::Flatline`). 16: the position's
 /// ramp test knows a restart from its first start and which arm called
 /// (`ramp::RampTest`). 17: the tracks carry the motion and the baro
-/// levels' error model (`track::VelocityTrack`).
-pub const VERSION: u32 = 17;
+/// levels' error model (`track::VelocityTrack`). 18: the tracks keep where
+/// they began (`track::VelocityTrack::back_to_origin`).
+pub const VERSION: u32 = 18;
 
 #[derive(Clone)]
 struct Header {

@@ -41,6 +41,11 @@ pub const NEAR: f64 = 2.5;
 /// a receiver whose track moved for good (a re-acquisition) is not judged
 /// against its old one for the rest of the flight.
 const RELEARN_S: f64 = 120.0;
+/// Span of the track's first learnt epochs whose mean is its origin, s.
+const ORIGIN_S: f64 = 5.0;
+/// Share of the baseline's offset from the origin that a return jump
+/// takes back (as the detector's `RETURN_UNDONE`).
+const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
 
 /// See the module docs. Positions in m (NED), times in true s.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -70,6 +75,13 @@ pub struct VelocityTrack {
     /// (xx₀₀, xx₀₁, xx₁₁) and `x y`. The level's own error model.
     mxx: [f64; 3],
     mxy: [f64; 2],
+    /// The mean of `d` over the track's first `ORIGIN_S` of learnt epochs,
+    /// and the time learnt into it, s: where the level began (see
+    /// `back_to_origin`).
+    origin: [f64; 3],
+    origin_age: f64,
+    /// This epoch's jump went back to the origin (see `back_to_origin`).
+    at_origin: bool,
 }
 
 impl VelocityTrack {
@@ -94,6 +106,36 @@ impl VelocityTrack {
         self.dt = dt;
         self.d_prev = self.d;
         self.d = Some(core::array::from_fn(|a| y[a] - self.integral[a]));
+        self.back_to_origin();
+    }
+
+    /// A fault that began in the flight's first seconds is learnt as the
+    /// baseline, and its end, the level jumping back to where it began,
+    /// looked like a new fault (battery tune #270: a 12.2 m baro step from
+    /// 8 s to 107 s, its end flagged for the rest of the flight; #656: a
+    /// position ramp from 5.6 s, its end flagged for 60 s). When the
+    /// baseline sits beyond `FAR` σ of the origin and this epoch's jump
+    /// brings `d` from beyond `FAR` σ of the origin to within `NEAR` σ of
+    /// it, the baseline moves back to the origin, so `returned` reports the
+    /// return.
+    fn back_to_origin(&mut self) {
+        self.at_origin = false;
+        let (Some(d), Some(p)) = (self.d, self.d_prev) else { return };
+        if self.origin_age < ORIGIN_S || self.age < MIN_AGE_S {
+            return;
+        }
+        // The jump takes back most of the baseline's offset from the
+        // origin (see `RETURN_UNDONE`), which lies beyond `NEAR` σ: σ itself
+        // learnt part of a fault that came while it was starting.
+        let off: [f64; 3] = core::array::from_fn(|a| self.base[a] - self.origin[a]);
+        let off2: f64 = off.iter().map(|x| x * x).sum();
+        let undone = -(0..3).map(|a| (d[a] - p[a]) * off[a]).sum::<f64>() / off2;
+        let from_origin = (0..3).map(|a| ((d[a] - self.origin[a]) / self.sigma(a)).powi(2)).sum::<f64>().sqrt();
+        if self.z(&self.origin) > NEAR && (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone) && from_origin < NEAR {
+            self.base = self.origin;
+            self.outlying = 0.0;
+            self.at_origin = true;
+        }
     }
 
     fn sigma(&self, a: usize) -> f64 {
@@ -123,6 +165,13 @@ impl VelocityTrack {
             self.motion_base = self.motion;
         }
         self.outlying = 0.0;
+        if self.origin_age < ORIGIN_S {
+            let wo = dt / (self.origin_age + dt);
+            for a in 0..3 {
+                self.origin[a] += wo * (d[a] - self.origin[a]);
+            }
+            self.origin_age += dt;
+        }
         let w = (dt / TAU_S).fmax(dt / (self.age + dt)).fmin(1.0);
         self.age += dt;
         for a in 0..3 {
@@ -200,6 +249,9 @@ impl VelocityTrack {
         if let Some(j) = self.jump() {
             for a in 0..3 {
                 self.base[a] += j[a];
+                // The level before the jump was the fault's, from the
+                // track's start too: the origin moves with the baseline.
+                self.origin[a] += j[a];
             }
             self.outlying = 0.0;
         }
@@ -254,6 +306,7 @@ impl VelocityTrack {
             self.motion_base = self.motion;
         }
         if let (Some(d), true) = (self.d, a < 3) {
+            self.origin[a] += d[a] - self.base[a];
             self.base[a] = d[a];
             self.outlying = 0.0;
         }
@@ -269,8 +322,12 @@ impl VelocityTrack {
     }
 
     /// This epoch's jump brought `d` from beyond `FAR` σ of its baseline to
-    /// within `NEAR` σ: the end of a position fault.
+    /// within `NEAR` σ, or back to where the track began (`back_to_origin`):
+    /// the end of a position fault.
     pub fn returned(&self) -> bool {
+        if self.at_origin {
+            return true;
+        }
         match (self.d, self.d_prev) {
             (Some(d), Some(p)) if self.age >= MIN_AGE_S => self.z(&p) > FAR && self.z(&d) < NEAR,
             _ => false,
@@ -348,6 +405,25 @@ mod tests {
         assert!(tr.departure_net(K) > 1.0, "{:.2}", tr.departure_net(K));
     }
 
+    /// A level that steps 12 m 8 s after it began learns the step into its
+    /// baseline and σ; its jump back to where it began is a return
+    /// (`back_to_origin`), while the same jump up from a level that never
+    /// left its origin is not.
+    #[test]
+    fn a_jump_back_to_where_the_track_began_is_a_return() {
+        let noise = |t: f64| 0.2 * (t / 1.3).sin();
+        let mut stepped = VelocityTrack::default();
+        let back = run(&mut stepped, 0, 1000, &|t| [noise(t) + if t >= 8.0 { 12.0 } else { 0.0 }, 0.0, 0.0]);
+        assert!(!back.iter().any(|r| *r), "no return while the step lasts");
+        let back = run(&mut stepped, 1000, 5, &|t| [noise(t), 0.0, 0.0]);
+        assert_eq!(back, [true, false, false, false, false]);
+        assert!(stepped.on_track());
+        let mut steady = VelocityTrack::default();
+        run(&mut steady, 0, 1000, &|t| [noise(t), 0.0, 0.0]);
+        let up = run(&mut steady, 1000, 5, &|t| [noise(t) + 12.0, 0.0, 0.0]);
+        assert!(!up.iter().any(|r| *r), "{up:?}");
+    }
+
     /// After a drag-off's end (rebased), the fixes at the new level are the
     /// track: a later jump back to the drag's level is not a "return".
     #[test]
@@ -393,5 +469,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy });
+    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy, origin, origin_age, at_origin });
 }
