@@ -1541,6 +1541,9 @@ struct Evidence<'a> {
     sigma_pos: [f64; 3],
     /// The fix sits on its own velocity track (`VelocityTrack::on_track`).
     on_track: bool,
+    /// The position's wander about its velocity track per axis, m
+    /// (`VelocityTrack::sigmas`).
+    sigma_track: [f64; 3],
 }
 
 impl Evidence<'_> {
@@ -1848,10 +1851,14 @@ impl Episode {
             return;
         }
         // σ along the offset: a step on one axis is judged by that axis'
-        // noise, not by the three axes' together.
+        // noise, not by the three axes' together; and by the larger of the
+        // epoch-to-epoch noise (σ_Δ) and the position's wander about its
+        // velocity track, so a receiver that moves smoothly (σ_Δ 0.15 m on
+        // the paper's flight) does not keep the offset of a brief false
+        // episode, which then ate a ramp's first epochs as its "end".
         let nu = ev.res.pin.nu;
         let len2: f64 = nu.iter().map(|x| x * x).sum();
-        let sigma2: f64 = (0..3).map(|a| nu[a] * nu[a] * ev.sigma_pos[a] * ev.sigma_pos[a]).sum::<f64>() / len2;
+        let sigma2: f64 = (0..3).map(|a| (nu[a] * ev.sigma_pos[a].fmax(ev.sigma_track[a])).powi(2)).sum::<f64>() / len2;
         if len2 > KEEP_MIN_SIGMAS * KEEP_MIN_SIGMAS * sigma2 {
             self.accepted = Some(nu);
         }
@@ -2547,6 +2554,7 @@ impl Detector {
             res: &res,
             sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
             on_track: self.consistency.track.on_track(),
+            sigma_track: self.consistency.track.sigmas(),
         };
         let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         step.reset |= restart;
@@ -2931,7 +2939,7 @@ mod tests {
             prev_r: [0.0; 6],
             r_ref: [0.0; 3],
         }));
-        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None, res, sigma_pos: [0.1; 3], on_track: false }
+        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None, res, sigma_pos: [0.1; 3], on_track: false, sigma_track: [0.3; 3] }
     }
 
     #[test]

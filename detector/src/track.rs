@@ -142,6 +142,12 @@ impl VelocityTrack {
         self.ms[a].sqrt().fmax(SIGMA_FLOOR_M)
     }
 
+    /// σ of `d`'s wander about the baseline per axis, m (the prior before
+    /// any is learnt).
+    pub fn sigmas(&self) -> [f64; 3] {
+        core::array::from_fn(|a| self.sigma(a))
+    }
+
     /// Norm over the axes of `(x − base)/σ`.
     fn z(&self, x: &[f64; 3]) -> f64 {
         (0..3).map(|a| ((x[a] - self.base[a]) / self.sigma(a)).powi(2)).sum::<f64>().sqrt()
