@@ -112,12 +112,14 @@ impl VelocityTrack {
     /// A fault that began in the flight's first seconds is learnt as the
     /// baseline, and its end, the level jumping back to where it began,
     /// looked like a new fault (battery tune #270: a 12.2 m baro step from
-    /// 8 s to 107 s, its end flagged for the rest of the flight; #656: a
-    /// position ramp from 5.6 s, its end flagged for 60 s). When the
-    /// baseline sits beyond `FAR` σ of the origin and this epoch's jump
-    /// brings `d` from beyond `FAR` σ of the origin to within `NEAR` σ of
-    /// it, the baseline moves back to the origin, so `returned` reports the
-    /// return.
+    /// 8 s to 107 s, its end flagged for the rest of the flight). When the
+    /// baseline sits beyond `NEAR` σ of the origin and this epoch's jump
+    /// takes back `RETURN_UNDONE` of that offset, to within `NEAR` σ of the
+    /// origin, the baseline moves back to the origin and `returned` reports
+    /// the return. `NEAR`, not `FAR`: σ itself learnt part of a fault that
+    /// came while it was starting. A position ramp from the first seconds
+    /// (tune #656) is not caught: its σ learnt the ramp and its baseline
+    /// stayed within `NEAR` σ of the origin.
     fn back_to_origin(&mut self) {
         self.at_origin = false;
         let (Some(d), Some(p)) = (self.d, self.d_prev) else { return };
