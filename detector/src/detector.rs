@@ -62,7 +62,7 @@ use crate::sample::{range_of, Sample};
 use navguard_logs::decimal::Shortest;
 use crate::dragend::DragEnd;
 use crate::flatline::{self, Flatline};
-use crate::track::VelocityTrack;
+use crate::track::{VelocityTrack, RETURN_UNDONE};
 
 /// What kind of verdict a row carries.
 pub mod kind {
@@ -299,11 +299,12 @@ const SILENT_OUTAGE_S: f64 = 1.5;
 const POSITION_COAST_S: f64 = 60.0;
 /// A return jump must undo an offset of at least this many σ_Δ...
 const RETURN_MIN_SIGMAS: f64 = 6.0;
-/// ...and, along the offset's direction, between these shares of it (a
-/// return to where the GPS was before, up to the coast's drift).
-const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
-/// An episode that ends with the fix this many σ_Δ (along the offset)
-/// off the coasted filter keeps the offset (`Episode::ended_off_track`).
+// ...and, along the offset's direction, between `track::RETURN_UNDONE`
+// shares of it (a return to where the GPS was before, up to the coast's
+// drift; the tracks' return to their origin uses the same shares).
+/// An episode that ends with the fix this many σ (along the offset; σ the
+/// larger of σ_Δ and the position's wander about its velocity track) off
+/// the coasted filter keeps the offset (`Episode::ended_off_track`).
 /// Lower than `RETURN_MIN_SIGMAS`: keeping one only lets a later jump
 /// that undoes it end a fault, and a 15.6 m vertical step under a 1 Hz
 /// receiver is 5.4 σ_Δ (battery tune #551).
@@ -1839,7 +1840,7 @@ impl Episode {
     }
 
     /// A position-only episode that ended (a normal verdict, or recovered)
-    /// while the fix is still `RETURN_MIN_SIGMAS` σ off the coasted filter:
+    /// while the fix is still `KEEP_MIN_SIGMAS` σ off the coasted filter:
     /// the verdict's windows let a persisting step pass (battery tune #599:
     /// a 6.4 m step under a 0.47 m receiver, flagged for one epoch), or the
     /// recovery took it for the filter's drift (tune #551: a 15.6 m

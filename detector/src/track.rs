@@ -43,9 +43,10 @@ pub const NEAR: f64 = 2.5;
 const RELEARN_S: f64 = 120.0;
 /// Span of the track's first learnt epochs whose mean is its origin, s.
 const ORIGIN_S: f64 = 5.0;
-/// Share of the baseline's offset from the origin that a return jump
-/// takes back (as the detector's `RETURN_UNDONE`).
-const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
+/// Share of an offset that a return jump takes back: of the baseline's
+/// offset from the origin here, of a fault's offset in the detector's
+/// episodes.
+pub const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
 
 /// See the module docs. Positions in m (NED), times in true s.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
@@ -126,9 +127,6 @@ impl VelocityTrack {
         if self.origin_age < ORIGIN_S || self.age < MIN_AGE_S {
             return;
         }
-        // The jump takes back most of the baseline's offset from the
-        // origin (see `RETURN_UNDONE`), which lies beyond `NEAR` σ: σ itself
-        // learnt part of a fault that came while it was starting.
         let off: [f64; 3] = core::array::from_fn(|a| self.base[a] - self.origin[a]);
         let off2: f64 = off.iter().map(|x| x * x).sum();
         let undone = -(0..3).map(|a| (d[a] - p[a]) * off[a]).sum::<f64>() / off2;
