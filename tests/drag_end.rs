@@ -42,8 +42,8 @@ fn a_step_taken_for_a_drag_off_end_is_undone_by_its_own_end() {
 /// Regression: tune #531 (hover, 2 Hz Gauss–Markov receiver σ 2.3 m):
 /// a 0.64 m/s drag-off for 89 s (58 m). Its end shifted the velocity's
 /// mean by 0.54 m/s against a learnt shift σ of 0.19 m/s: 2.8σ, under
-/// the 3σ the confirmation asked, so the return was judged as a step for
-/// 20 s. The confirmation now asks 2.5σ: taking a step's onset for a
+/// the 3σ the confirmation asked, so the return was judged as a step
+/// (every epoch of the 20 s after it). The confirmation now asks 2.5σ: taking a step's onset for a
 /// drag-off's end is no longer final, since the step's own end undoes the
 /// offset it kept (`a_step_taken_for_a_drag_off_end_is_undone_by_its_own_end`).
 #[test]

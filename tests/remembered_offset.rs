@@ -11,8 +11,9 @@ use common::flagged_after_fault;
 use navguard::battery::{Axis, Flight, Split};
 
 /// Regression: tune #599 (aggressive, 10 Hz white receiver σ 0.47 m): its
-/// second step (6.4 m for 23 s, 9σ of its axis) was flagged for one epoch: the verdict's windows diluted it and
-/// the first unflagged epoch moved the reference. The episode closed with
+/// second step (6.4 m for 23 s, 9σ of its axis) was flagged for one
+/// epoch: the verdict's windows diluted it and the first unflagged epoch
+/// moved the reference. The episode closed with
 /// the fix still 6.7 m off the coasted filter, the filter followed the
 /// step, and its end was judged as a new step for the 60 s coast limit
 /// (every epoch of the 30 s after it). An episode that closes that far off
@@ -28,7 +29,8 @@ fn a_step_that_passed_after_one_epoch_is_undone_by_its_own_end() {
 /// Regression: tune #551 (survey, 1 Hz white receiver σ 1.23 m): a 15.6 m
 /// vertical step for 117 s (5.4 σ_Δ of the vertical) was recovered from
 /// 7 s in as the filter's own drift and then followed. Its end was judged
-/// as a new step: 60 s of flags, 90 in all. Now the recovery keeps the
+/// as a new step: 56 of the 60 epochs after it flagged, 205 false-positive
+/// epochs in the flight. Now the recovery keeps the
 /// offset, its end undoes it, and the GPS position track's baseline, which
 /// had learnt the step, moves back with the return.
 #[test]
