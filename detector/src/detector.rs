@@ -309,13 +309,6 @@ const RETURN_MIN_SIGMAS: f64 = 6.0;
 /// that undoes it end a fault, and a 15.6 m vertical step under a 1 Hz
 /// receiver is 5.4 σ_Δ (battery tune #551).
 const KEEP_MIN_SIGMAS: f64 = 4.0;
-/// Flight time at which the accelerometer-bias estimate is kept as the
-/// sensor's own, s: learnt on the ground and in the first seconds of
-/// flight (see `bias_returned`).
-const BIAS_ORIGIN_S: f64 = 2.0;
-/// How far the bias estimate must have moved from it, m/s²: the smallest
-/// bias the IMU test catches reliably (28 of 30 at 0.3 m/s²).
-const BIAS_JUMP: f64 = 0.3;
 /// s: time constant of the learnt accelerometer noise.
 const IMU_PSD_TAU: f64 = 2.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
@@ -426,35 +419,6 @@ pub struct Detector {
     /// Boot time (s) until which the vehicle counts as upset (see
     /// [`kind::UPSET`]); NaN when it never was.
     upset_until: f64,
-    /// The accelerometer-bias estimate (body frame, m/s²) at
-    /// `BIAS_ORIGIN_S` of flight: the sensor's own bias, learnt before a
-    /// fault of the first seconds could be (see `bias_returned`).
-    bias_origin: Option<Vector3<f64>>,
-}
-
-/// An IMU episode would open (the IMU test alone condemns the IMU)
-/// while the bias estimate sits `BIAS_JUMP` off the one learnt at
-/// `BIAS_ORIGIN_S` of flight: the filter learnt a fault of the first
-/// seconds as the sensor's bias, and this is that fault's end (battery
-/// tune #560: a 1.37 m/s² bias from 9 s learnt to −1.08 over 80 s; its
-/// end opened an IMU episode that held the learnt bias for the 120 s
-/// left). The bias goes back to the origin's and the IMU test's
-/// windows restart. A bias fault that begins now is still called once
-/// the windows hold it again, with the bias at the origin's.
-fn bias_returned(bias_origin: &mut Option<Vector3<f64>>, flight_time: f64, ind: &mut IndicatorEngine, kf: &mut Kf) -> bool {
-    let Some(origin) = *bias_origin else {
-        if flight_time >= BIAS_ORIGIN_S {
-            *bias_origin = Some(kf.accel_bias());
-        }
-        return false;
-    };
-    let imu_alone = ind.imu_folded() && ind.r_unfolded() < GATE;
-    if !imu_alone || (kf.accel_bias() - origin).norm() <= BIAS_JUMP {
-        return false;
-    }
-    kf.set_accel_bias(&origin);
-    ind.clear_imu();
-    true
 }
 
 /// A GPS fix in the local frame.
@@ -2101,7 +2065,6 @@ impl Detector {
             stats: Stats::default(),
             oracle: false,
             upset_until: f64::NAN,
-            bias_origin: None,
             cfg,
         }
     }
@@ -2561,7 +2524,6 @@ impl Detector {
             // `VelocityTrack::back_to_origin`).
             self.consistency.baro_drift.clear();
         }
-        let bias_back = !self.oracle && verdict.fault && !self.episode.active && bias_returned(&mut self.bias_origin, self.consistency.flight_time, &mut self.ind, kf);
         let drag_end = self.consistency.drag_ended(fix.t, self.episode.active);
         if drag_end {
             // The confirmation can take a step's onset for a drag-off's end
@@ -2579,7 +2541,7 @@ impl Detector {
             // vertical one spans 6 s, longer than the 5 s hold).
             self.ind.clear_imu();
         }
-        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end || upset || baro_back || bias_back);
+        let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end || upset || baro_back);
         let was_active = self.episode.active;
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
@@ -3395,7 +3357,7 @@ mod codec_impls {
     impl_codec!(Output { t, status, f, r, c, kind, gps_epoch, driver });
     impl_codec!(Stats { rows, gps_epochs, imu_rows, baro_rows, retrains, filter_resets, data_gaps, filter_errors });
     impl_codec!(Ring { buf, head, len });
-    impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until, bias_origin });
+    impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until });
     impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run, declared, acquired, last_declared });
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
