@@ -62,7 +62,7 @@ use crate::sample::{range_of, Sample};
 use navguard_logs::decimal::Shortest;
 use crate::dragend::DragEnd;
 use crate::flatline::{self, Flatline};
-use crate::track::{VelocityTrack, RETURN_UNDONE};
+use crate::track::{undoes, VelocityTrack};
 
 /// What kind of verdict a row carries.
 pub mod kind {
@@ -300,8 +300,9 @@ const POSITION_COAST_S: f64 = 60.0;
 /// A return jump must undo an offset of at least this many σ_Δ...
 const RETURN_MIN_SIGMAS: f64 = 6.0;
 // ...and, along the offset's direction, between `track::RETURN_UNDONE`
-// shares of it (a return to where the GPS was before, up to the coast's
-// drift; the tracks' return to their origin uses the same shares).
+// shares of it (`track::undoes`: a return to where the GPS was before, up
+// to the coast's drift; the tracks' return to their origin is judged the
+// same way).
 /// An episode that ends with the fix this many σ (along the offset; σ the
 /// larger of σ_Δ and the position's wander about its velocity track) off
 /// the coasted filter keeps the offset (`Episode::ended_off_track`).
@@ -1744,17 +1745,6 @@ struct EpisodeStep {
     fault: bool,
     /// Re-anchor the filter on this fix (coasted too long, or recovered).
     reset: bool,
-}
-
-/// `jump` (m) takes back most of `off` (m, more than `min2` m² long)
-/// along its direction: between `RETURN_UNDONE` of it.
-fn undoes(jump: &[f64; 3], off: &[f64; 3], min2: f64) -> bool {
-    let off2: f64 = off.iter().map(|x| x * x).sum();
-    if !(off2 > min2 && off2 > 0.0) {
-        return false;
-    }
-    let undone = -(0..3).map(|a| jump[a] * off[a]).sum::<f64>() / off2;
-    (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone)
 }
 
 impl Episode {

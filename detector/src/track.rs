@@ -48,6 +48,17 @@ const ORIGIN_S: f64 = 5.0;
 /// episodes.
 pub const RETURN_UNDONE: (f64, f64) = (0.6, 1.4);
 
+/// `jump` (m) takes back most of `off` (m, more than `min2` m² long)
+/// along its direction: between `RETURN_UNDONE` of it.
+pub fn undoes(jump: &[f64; 3], off: &[f64; 3], min2: f64) -> bool {
+    let off2: f64 = off.iter().map(|x| x * x).sum();
+    if !(off2 > min2 && off2 > 0.0) {
+        return false;
+    }
+    let undone = -(0..3).map(|a| jump[a] * off[a]).sum::<f64>() / off2;
+    (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone)
+}
+
 /// See the module docs. Positions in m (NED), times in true s.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct VelocityTrack {
@@ -127,11 +138,9 @@ impl VelocityTrack {
         if self.origin_age < ORIGIN_S || self.age < MIN_AGE_S {
             return;
         }
+        let jump: [f64; 3] = core::array::from_fn(|a| d[a] - p[a]);
         let off: [f64; 3] = core::array::from_fn(|a| self.base[a] - self.origin[a]);
-        let off2: f64 = off.iter().map(|x| x * x).sum();
-        let undone = -(0..3).map(|a| (d[a] - p[a]) * off[a]).sum::<f64>() / off2;
-        let from_origin = (0..3).map(|a| ((d[a] - self.origin[a]) / self.sigma(a)).powi(2)).sum::<f64>().sqrt();
-        if self.z(&self.origin) > NEAR && (RETURN_UNDONE.0..=RETURN_UNDONE.1).contains(&undone) && from_origin < NEAR {
+        if self.z(&self.origin) > NEAR && undoes(&jump, &off, 0.0) && self.z_from(&d, &self.origin) < NEAR {
             self.base = self.origin;
             self.outlying = 0.0;
             self.at_origin = true;
@@ -150,7 +159,12 @@ impl VelocityTrack {
 
     /// Norm over the axes of `(x − base)/σ`.
     fn z(&self, x: &[f64; 3]) -> f64 {
-        (0..3).map(|a| ((x[a] - self.base[a]) / self.sigma(a)).powi(2)).sum::<f64>().sqrt()
+        self.z_from(x, &self.base)
+    }
+
+    /// Norm over the axes of `(x − level)/σ`.
+    fn z_from(&self, x: &[f64; 3], level: &[f64; 3]) -> f64 {
+        (0..3).map(|a| ((x[a] - level[a]) / self.sigma(a)).powi(2)).sum::<f64>().sqrt()
     }
 
     /// A normal epoch: learn the baseline and σ from it if it lies within
