@@ -40,3 +40,19 @@ fn a_vertical_step_recovered_as_drift_is_undone_by_its_own_end() {
     let (n, of) = flagged_after_fault(&f, 0, 60.0);
     assert!(of > 55 && n * 20 <= of, "{n} of {of} epochs flagged in the 60 s after the step");
 }
+
+/// Regression: tune #1247 (hover, 10 Hz Gauss–Markov receiver σ 0.56 m):
+/// the onset of a 5.65 m vertical step (14 s) was read as the end of a
+/// fault the filter had followed (the fix back onto its velocity track),
+/// so the filter re-anchored onto the step and nothing was flagged. The
+/// step's end, the truth coming back, was then judged as a new step for
+/// the 60 s coast limit: 584 false-positive epochs. A re-anchoring on an
+/// unflagged fault's "end" now keeps that jump as an offset, like a
+/// coasted-out episode's, so the next jump that undoes it ends it.
+#[test]
+fn a_step_taken_for_a_faults_end_is_undone_by_its_own_end() {
+    let f = Flight::draw(Split::Tune, 1247);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("step", Axis::Vertical));
+    let (n, of) = flagged_after_fault(&f, 0, 60.0);
+    assert!(of > 550 && n * 20 <= of, "{n} of {of} epochs flagged in the 60 s after the step");
+}

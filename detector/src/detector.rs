@@ -1161,6 +1161,11 @@ impl Consistency {
     /// calls `usual`, off its track with its velocity jumping along by more
     /// than `sigma_dv` allows (a drag-off the filter followed, see
     /// `Residuals::drag_returned`), which moves the track's baseline with it.
+    /// Either of the last two may take a step's onset for a fault's end
+    /// (battery tune #1247: a 5.65 m vertical step re-anchored onto at once),
+    /// so the jump re-anchored onto is kept like a coasted-out episode's
+    /// offset: the step's own end undoes it instead of opening a 60 s
+    /// episode.
     fn unflagged_fault_ended(&mut self, episode: &mut Episode, res: &Residuals, usual: bool, sigma_dv: [f64; 3]) -> bool {
         // Asked first: a remembered offset is forgotten once undone, even
         // when the track also says the fault ended.
@@ -1172,14 +1177,17 @@ impl Consistency {
             self.track.rebase();
             return true;
         }
-        if self.track.returned() {
-            return true;
+        let back = self.track.returned() || {
+            let dragged = usual && res.drag_returned(self.flight_time, self.track.jump(), sigma_dv);
+            if dragged {
+                self.track.rebase();
+            }
+            dragged
+        };
+        if back {
+            episode.accepted = Some(res.pin.nu);
         }
-        let dragged = usual && res.drag_returned(self.flight_time, self.track.jump(), sigma_dv);
-        if dragged {
-            self.track.rebase();
-        }
-        dragged
+        back
     }
 
     /// The baro's levels at a GPS epoch at `t` (position `y` NED m, GPS
