@@ -67,7 +67,7 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// (`ramp::RampTest`). 17: the tracks carry the motion and the baro
 /// levels' error model (`track::VelocityTrack`). 18: the tracks keep where
 /// they began (`track::VelocityTrack::back_to_origin`).
-pub const VERSION: u32 = 18;
+pub const VERSION: u32 = 19;
 
 #[derive(Clone)]
 struct Header {

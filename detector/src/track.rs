@@ -94,6 +94,9 @@ pub struct VelocityTrack {
     origin_age: f64,
     /// This epoch's jump went back to the origin (see `back_to_origin`).
     at_origin: bool,
+    /// Learnt mean square of `d`'s change from one epoch to the next per
+    /// axis, m² (0 before any): the scale a jump is measured on.
+    ms_step: [f64; 3],
 }
 
 impl VelocityTrack {
@@ -129,9 +132,18 @@ impl VelocityTrack {
     /// takes back `RETURN_UNDONE` of that offset, to within `NEAR` σ of the
     /// origin, the baseline moves back to the origin and `returned` reports
     /// the return. `NEAR`, not `FAR`: σ itself learnt part of a fault that
-    /// came while it was starting. A position ramp from the first seconds
-    /// (tune #656) is not caught: its σ learnt the ramp and its baseline
-    /// stayed within `NEAR` σ of the origin.
+    /// came while it was starting. A drift from the first seconds is
+    /// learnt more than a step: its baseline lags it and σ grows with it,
+    /// so the baseline stays within `NEAR` σ (tune #1513: a baro drifting
+    /// 24 m, σ 7.8 m, baseline 12 m off, its end flagged for 89 s). So the
+    /// offset is also measured on the level just before the jump: beyond
+    /// `NEAR` σ of the origin, the jump taking back `RETURN_UNDONE` of it,
+    /// `FAR` times the level's epoch-to-epoch change (a jump, not one fix's
+    /// noise), and the baseline moved `NEAR` of those toward it (the track
+    /// learnt the fault; a baseline still at the origin needs no return:
+    /// tune #273's aggressive flight jumped a level 1.6 m in one epoch).
+    /// A position ramp from the first seconds (tune #656) is still not
+    /// caught.
     fn back_to_origin(&mut self) {
         self.at_origin = false;
         let (Some(d), Some(p)) = (self.d, self.d_prev) else { return };
@@ -140,11 +152,28 @@ impl VelocityTrack {
         }
         let jump: [f64; 3] = core::array::from_fn(|a| d[a] - p[a]);
         let off: [f64; 3] = core::array::from_fn(|a| self.base[a] - self.origin[a]);
-        if self.z(&self.origin) > NEAR && undoes(&jump, &off, 0.0) && self.z_from(&d, &self.origin) < NEAR {
+        let by_base = self.z(&self.origin) > NEAR && undoes(&jump, &off, 0.0);
+        let level: [f64; 3] = core::array::from_fn(|a| p[a] - self.origin[a]);
+        let by_level = self.z_from(&p, &self.origin) > NEAR
+            && undoes(&jump, &level, 0.0)
+            && -self.steps_along(&jump, &level) > FAR
+            && self.steps_along(&off, &level) > NEAR;
+        if (by_base || by_level) && self.z_from(&d, &self.origin) < NEAR {
             self.base = self.origin;
             self.outlying = 0.0;
             self.at_origin = true;
         }
+    }
+
+    /// `x` (m) along `dir` in σ of `d`'s epoch-to-epoch change along it
+    /// (signed; 0 until that is learnt).
+    fn steps_along(&self, x: &[f64; 3], dir: &[f64; 3]) -> f64 {
+        let (mut along, mut var) = (0.0, 0.0);
+        for a in 0..3 {
+            along += x[a] * dir[a];
+            var += dir[a] * dir[a] * self.ms_step[a];
+        }
+        if var > 0.0 { along / var.sqrt() } else { 0.0 }
     }
 
     fn sigma(&self, a: usize) -> f64 {
@@ -194,6 +223,13 @@ impl VelocityTrack {
         }
         let w = (dt / TAU_S).fmax(dt / (self.age + dt)).fmin(1.0);
         self.age += dt;
+        if let Some(p) = self.d_prev {
+            for a in 0..3 {
+                let s2 = (d[a] - p[a]).powi(2);
+                let m = self.ms_step[a];
+                self.ms_step[a] = if m > 0.0 { m + w * (s2.fmin(9.0 * m) - m) } else { s2 };
+            }
+        }
         for a in 0..3 {
             let e = d[a] - self.base[a];
             self.base[a] += w * e;
@@ -444,6 +480,26 @@ mod tests {
         assert!(!up.iter().any(|r| *r), "{up:?}");
     }
 
+    /// A drift from the first seconds (battery tune #1513: a baro drifting
+    /// 0.25 m/s from 8.8 s for 96 s): σ learns the drift and the baseline
+    /// lags it, so the baseline never sits `NEAR` σ off the origin. The
+    /// jump back to the origin from the drifted level is still a return:
+    /// measured on the level before it, and large against the epoch-to-epoch
+    /// change. A jump back by half the offset is not.
+    #[test]
+    fn a_jump_back_to_the_origin_from_a_drift_the_baseline_lagged_is_a_return() {
+        let noise = |t: f64| 0.2 * (t / 1.3).sin();
+        let drift = |t: f64| noise(t) + 0.25 * (t - 8.0).clamp(0.0, 96.0);
+        for (back, end) in [(1.0, true), (0.5, false)] {
+            let mut tr = VelocityTrack::default();
+            let during = run(&mut tr, 0, 1040, &|t| [drift(t), 0.0, 0.0]);
+            assert!(!during.iter().any(|r| *r), "no return while the drift lasts");
+            assert!(tr.z(&tr.origin) < NEAR, "the baseline lagged: {:.2} σ", tr.z(&tr.origin));
+            let after = run(&mut tr, 1040, 3, &|t| [drift(t) - back * 0.25 * 96.0, 0.0, 0.0]);
+            assert_eq!(after, [end, false, false], "back {back}");
+        }
+    }
+
     /// After a drag-off's end (rebased), the fixes at the new level are the
     /// track: a later jump back to the drag's level is not a "return".
     #[test]
@@ -489,5 +545,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy, origin, origin_age, at_origin });
+    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy, origin, origin_age, at_origin, ms_step });
 }
