@@ -46,12 +46,14 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // under it with 8.3 KB to spare (298,887 B); session 10's detector work
 // (the vertical ramp arm, its return on a jump back, the σ_Δ warm-up,
 // the baro levels' error model) adds 2,131 B: 301,018 B. Session 11's
-// (kept offsets, the tracks' origin) adds 1,077 B: 302,095 B. The budget
+// (kept offsets, the tracks' origin) adds 1,077 B: 302,095 B; session 12's
+// (the offset kept on an unflagged fault's end, the origin measured on the
+// level before the jump) 819 B: 302,914 B. The budget
 // guards today's size plus 0.5 KB: a
 // change that crosses it must find the bytes elsewhere, or raise it with
 // the reason, never past the goal, which the last test asserts.
 const FIRST_USE_GOAL = 307_200;
-const CORE_WASM_BUDGET = 302_600;
+const CORE_WASM_BUDGET = 303_400;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;
