@@ -130,16 +130,20 @@ impl VelocityTrack {
     /// 8 s to 107 s, its end flagged for the rest of the flight). When the
     /// baseline sits beyond `NEAR` σ of the origin and this epoch's jump
     /// takes back `RETURN_UNDONE` of that offset, to within `NEAR` σ of the
-    /// origin, the baseline moves back to the origin and `returned` reports
-    /// the return. `NEAR`, not `FAR`: σ itself learnt part of a fault that
+    /// origin, and is `FAR` times the level's epoch-to-epoch change along
+    /// it (a jump, not one fix's noise: a healthy 1 Hz level wandering
+    /// 1.6 m about its origin had its baseline that far off, and a noise
+    /// step back passed for a return; the property test below), the
+    /// baseline moves back to the origin and `returned` reports the
+    /// return. `NEAR`, not `FAR`: σ itself learnt part of a fault that
     /// came while it was starting. A drift from the first seconds is
     /// learnt more than a step: its baseline lags it and σ grows with it,
     /// so the baseline stays within `NEAR` σ (tune #1513: a baro drifting
     /// 24 m, σ 7.8 m, baseline 12 m off, its end flagged for 89 s). So the
     /// offset is also measured on the level just before the jump: beyond
     /// `NEAR` σ of the origin, the jump taking back `RETURN_UNDONE` of it,
-    /// `FAR` times the level's epoch-to-epoch change (a jump, not one fix's
-    /// noise), and the baseline moved `NEAR` of those toward it (the track
+    /// `FAR` times the level's epoch-to-epoch change, and the baseline
+    /// moved `NEAR` of those toward it (the track
     /// learnt the fault; a baseline still at the origin needs no return:
     /// tune #273's aggressive flight jumped a level 1.6 m in one epoch).
     /// A position ramp from the first seconds (tune #656) is still not
@@ -152,7 +156,7 @@ impl VelocityTrack {
         }
         let jump: [f64; 3] = core::array::from_fn(|a| d[a] - p[a]);
         let off: [f64; 3] = core::array::from_fn(|a| self.base[a] - self.origin[a]);
-        let by_base = self.z(&self.origin) > NEAR && undoes(&jump, &off, 0.0);
+        let by_base = self.z(&self.origin) > NEAR && undoes(&jump, &off, 0.0) && -self.steps_along(&jump, &off) > FAR;
         let level: [f64; 3] = core::array::from_fn(|a| p[a] - self.origin[a]);
         let by_level = self.z_from(&p, &self.origin) > NEAR
             && undoes(&jump, &level, 0.0)
@@ -497,6 +501,28 @@ mod tests {
             assert!(tr.z(&tr.origin) < NEAR, "the baseline lagged: {:.2} σ", tr.z(&tr.origin));
             let after = run(&mut tr, 1040, 3, &|t| [drift(t) - back * 0.25 * 96.0, 0.0, 0.0]);
             assert_eq!(after, [end, false, false], "back {back}");
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// A healthy level (white noise of any size about a slow wander,
+        /// at any GPS rate) has no fault to come back from: no epoch of
+        /// five minutes is a return to the origin, by the baseline's offset
+        /// or by the level's.
+        #[test]
+        fn a_healthy_level_never_returns_to_its_origin(sigma in 0.05f64..3.0, hz in 1.0f64..20.0, wander in 0.0f64..2.0, seed in 0u64..u64::MAX) {
+            let mut rng = crate::rng::Rng::new(seed);
+            let mut tr = VelocityTrack::default();
+            let dt = 1.0 / hz;
+            for i in 0..(300.0 * hz) as usize {
+                let t = i as f64 * dt;
+                let w = wander * libm::sin(t / 40.0);
+                let d = [w + sigma * rng.normal(), sigma * rng.normal(), -w + sigma * rng.normal()];
+                tr.step(dt, d, [0.0; 3], [0.0; 3]);
+                proptest::prop_assert!(!tr.at_origin, "t {t:.1}");
+                tr.learn();
+            }
         }
     }
 
