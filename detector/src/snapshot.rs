@@ -66,7 +66,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// ramp test knows a restart from its first start and which arm called
 /// (`ramp::RampTest`). 17: the tracks carry the motion and the baro
 /// levels' error model (`track::VelocityTrack`). 18: the tracks keep where
-/// they began (`track::VelocityTrack::back_to_origin`).
+/// they began (`track::VelocityTrack::back_to_origin`). 19: the tracks learn
+/// their epoch-to-epoch change (`VelocityTrack::ms_step`), the scale a
+/// return jump is measured on.
 pub const VERSION: u32 = 19;
 
 #[derive(Clone)]
