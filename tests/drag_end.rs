@@ -1,5 +1,5 @@
-//! The end of a horizontal drag-off confirmed over the seconds after the
-//! jump (detector/src/dragend.rs): the filter re-anchors on the returned
+//! The end of a drag-off (horizontal, and since session 12 vertical)
+//! confirmed over the seconds after the jump (detector/src/dragend.rs): the filter re-anchors on the returned
 //! fix instead of judging it as a step until the episode coasts out
 //! (issue 14: 38% of the false-positive epochs on the evaluation split lay
 //! within 20 s after a fault, most after drag-offs).
@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::flagged_after;
+use common::{flagged_after, flagged_after_fault};
 use navguard::battery::{Axis, Flight, Split};
 
 /// Regression: tune #58 (aggressive, 5 Hz Gauss–Markov receiver σ 2.6 m,
@@ -53,4 +53,19 @@ fn a_drag_off_end_at_under_three_sigma_is_confirmed() {
     let (n, of) = flagged_after(&f, 20.0);
     // The confirmation itself takes 2 s (4 fixes) of flags.
     assert!(of > 35 && n * 5 <= of, "{n} of {of} epochs flagged in the 20 s after the drag-off");
+}
+
+/// Regression: tune #246 (survey, 2 Hz Gauss–Markov receiver σ 0.67 m,
+/// tactical IMU): a 0.55 m/s vertical drag-off for 15 s (about 7 m) ends
+/// with a 0.55 m/s jump of the vertical velocity, within one epoch's noise,
+/// so the return was judged as a step for the 60 s coast limit (108
+/// false-positive epochs). The confirmation on the velocity's mean now
+/// runs on the vertical axis too (`DragEnd<1>`).
+#[test]
+fn the_end_of_a_vertical_drag_off_is_confirmed_and_re_anchored() {
+    let f = Flight::draw(Split::Tune, 246);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("drag-off", Axis::Vertical));
+    assert!(f.faults[1].start_log > f.faults[0].end_log + 30.0);
+    let (n, of) = flagged_after_fault(&f, 0, 30.0);
+    assert!(of >= 58 && n * 10 <= of, "{n} of {of} epochs flagged in the 30 s after the drag-off");
 }

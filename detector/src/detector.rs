@@ -862,7 +862,9 @@ struct Consistency {
     /// The position ramping off its velocity track.
     ramp: RampTest,
     /// The end of a horizontal drag-off, confirmed on the velocity's mean.
-    drag_end: DragEnd,
+    drag_end: DragEnd<2>,
+    /// The same on the vertical axis (a vertical drag-off's end).
+    drag_end_v: DragEnd<1>,
     /// The baro's reading held bit for bit (a stuck sensor, see `flatline`).
     baro_flat: Flatline,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
@@ -1147,6 +1149,7 @@ impl Consistency {
             baro_drift: DriftTest::default(),
             ramp: RampTest::default(),
             drag_end: DragEnd::default(),
+            drag_end_v: DragEnd::default(),
             baro_flat: Flatline::default(),
             baro_epoch: None,
         }
@@ -1282,27 +1285,41 @@ impl Consistency {
     /// a drag-off's end (see `dragend`): the track's level moved with the
     /// truth's return, so its baseline moves to the fix.
     fn drag_ended(&mut self, t: f64, episode_active: bool) -> bool {
-        let ended = episode_active && self.drag_end.confirmed(t, self.flight_time);
-        if ended {
+        let h = episode_active && self.drag_end.confirmed(t, self.flight_time);
+        let v = episode_active && self.drag_end_v.confirmed(t, self.flight_time);
+        if h {
             self.track.rebase_axis(0);
             self.track.rebase_axis(1);
         }
-        ended
+        if v {
+            self.track.rebase_axis(2);
+        }
+        h || v
     }
 
     /// A position episode that opened at this epoch (`opened_on_position`)
-    /// on a horizontal jump off the velocity track arms the drag-off's end
-    /// confirmation (see `dragend`); an episode that ended, or re-anchored,
-    /// disarms it.
+    /// on a jump off the velocity track arms the drag-off's end
+    /// confirmations, horizontal and vertical (see `dragend`); an episode
+    /// that ended, or re-anchored, disarms them.
     #[cfg_attr(navguard_cold_size, optimize(size))]
     #[inline(never)]
     fn arm_drag_end(&mut self, t: f64, opened_on_position: bool, step: &EpisodeStep) {
         if !step.fault || step.reset {
             self.drag_end.disarm();
+            self.drag_end_v.disarm();
         } else if opened_on_position {
+            // Each axis' confirmation judges its own part of the jump: the
+            // implied drag's age (`dragend::MIN_AGE_S`) rules out the small
+            // part a jump has on the other axes.
             match self.track.jump() {
-                Some(j) => self.drag_end.arm(t, [j[0], j[1]]),
-                None => self.drag_end.disarm(),
+                Some(j) => {
+                    self.drag_end.arm(t, [j[0], j[1]]);
+                    self.drag_end_v.arm(t, [j[2]]);
+                }
+                None => {
+                    self.drag_end.disarm();
+                    self.drag_end_v.disarm();
+                }
             }
         }
     }
@@ -1403,6 +1420,7 @@ impl Consistency {
         // The same `z` measures a drag-off's end (see `dragend`); an IMU gap
         // left changes out of `dv_imu`, so it restarts there.
         self.drag_end.push(t, z.filter(|_| !imu_gap && !vel_withheld));
+        self.drag_end_v.push(t, z3.map(|z| [z[2]]).filter(|_| !imu_gap && !vel_withheld));
         ind.set_imu_fold(imu_dense && self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).
@@ -2566,6 +2584,7 @@ impl Detector {
             self.consistency.baro_drift.learn();
             self.consistency.ramp.learn();
             self.consistency.drag_end.learn();
+            self.consistency.drag_end_v.learn();
         }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
@@ -3360,7 +3379,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_flat, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, drag_end_v, baro_flat, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

@@ -68,8 +68,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// levels' error model (`track::VelocityTrack`). 18: the tracks keep where
 /// they began (`track::VelocityTrack::back_to_origin`). 19: the tracks learn
 /// their epoch-to-epoch change (`VelocityTrack::ms_step`), the scale a
-/// return jump is measured on.
-pub const VERSION: u32 = 19;
+/// return jump is measured on. 20: a drag-off's end is confirmed on the
+/// vertical too (`dragend::DragEnd<1>`).
+pub const VERSION: u32 = 20;
 
 #[derive(Clone)]
 struct Header {
