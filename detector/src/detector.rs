@@ -862,9 +862,9 @@ struct Consistency {
     /// The position ramping off its velocity track.
     ramp: RampTest,
     /// The end of a horizontal drag-off, confirmed on the velocity's mean.
-    drag_end: DragEnd<2>,
+    drag_end: DragEnd,
     /// The same on the vertical axis (a vertical drag-off's end).
-    drag_end_v: DragEnd<1>,
+    drag_end_v: DragEnd,
     /// The baro's reading held bit for bit (a stuck sensor, see `flatline`).
     baro_flat: Flatline,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
@@ -1149,7 +1149,7 @@ impl Consistency {
             baro_drift: DriftTest::default(),
             ramp: RampTest::default(),
             drag_end: DragEnd::default(),
-            drag_end_v: DragEnd::default(),
+            drag_end_v: DragEnd::vertical(),
             baro_flat: Flatline::default(),
             baro_epoch: None,
         }
@@ -1314,7 +1314,7 @@ impl Consistency {
             match self.track.jump() {
                 Some(j) => {
                     self.drag_end.arm(t, [j[0], j[1]]);
-                    self.drag_end_v.arm(t, [j[2]]);
+                    self.drag_end_v.arm(t, [j[2], 0.0]);
                 }
                 None => {
                     self.drag_end.disarm();
@@ -1420,7 +1420,7 @@ impl Consistency {
         // The same `z` measures a drag-off's end (see `dragend`); an IMU gap
         // left changes out of `dv_imu`, so it restarts there.
         self.drag_end.push(t, z.filter(|_| !imu_gap && !vel_withheld));
-        self.drag_end_v.push(t, z3.map(|z| [z[2]]).filter(|_| !imu_gap && !vel_withheld));
+        self.drag_end_v.push(t, z3.map(|z| [z[2], 0.0]).filter(|_| !imu_gap && !vel_withheld));
         ind.set_imu_fold(imu_dense && self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).

@@ -1,6 +1,7 @@
 //! The end of a drag-off, confirmed over the seconds after the jump: on
-//! the horizontal (`DragEnd<2>`) and, since session 12, on the vertical
-//! (`DragEnd<1>`: battery tune #246, a 0.55 m/s vertical drag whose
+//! the horizontal and, since session 12, on the vertical (a second
+//! instance, `DragEnd::vertical`, whose `z` and jump have the down axis
+//! first and 0 second: battery tune #246, a 0.55 m/s vertical drag whose
 //! return was judged as a step for 54 s).
 //!
 //! A drag-off (position and velocity pulled off together, spoofing style)
@@ -60,14 +61,12 @@ const PRIOR_N: f64 = 5.0;
 const ALPHA: f64 = 0.01;
 
 /// An armed confirmation: the jump and both sides' sums along it.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(bound(serialize = "[f64; D]: Serialize", deserialize = "[f64; D]: Deserialize<'de>"))]
-pub struct Pending<const D: usize> {
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Pending {
     /// Time of the jump, s.
     t0: f64,
-    /// Unit direction of the jump (N, E; or down for the vertical test)
-    /// and its length, m.
-    u: [f64; D],
+    /// Unit direction of the jump (N, E) and its length, m.
+    u: [f64; 2],
     len: f64,
     /// Entries before the jump: count, mean and sum of squared deviations
     /// of `z` along `u`.
@@ -82,32 +81,34 @@ pub struct Pending<const D: usize> {
 
 /// See the module docs. Times in true s from the detector.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(bound(serialize = "[f64; D]: Serialize", deserialize = "[f64; D]: Deserialize<'de>"))]
-pub struct DragEnd<const D: usize> {
+pub struct DragEnd {
     /// Recent `(t, z)` entries, oldest first.
-    recent: Vec<(f64, [f64; D])>,
-    pending: Option<Pending<D>>,
+    recent: Vec<(f64, [f64; 2])>,
+    pending: Option<Pending>,
     /// Learnt mean square of the shift on normal epochs, (m/s)², and the
     /// shifts learnt from (NaN before the first: the prior).
     ms: f64,
     learnt: f64,
+    /// Judges one axis (the vertical, first; the second is 0), so the
+    /// shift's RMS is learnt from that axis alone.
+    one_axis: bool,
 }
 
-impl<const D: usize> Default for DragEnd<D> {
+impl Default for DragEnd {
     fn default() -> Self {
-        DragEnd { recent: Vec::new(), pending: None, ms: SHIFT_SIGMA0 * SHIFT_SIGMA0, learnt: 0.0 }
+        DragEnd { recent: Vec::new(), pending: None, ms: SHIFT_SIGMA0 * SHIFT_SIGMA0, learnt: 0.0, one_axis: false }
     }
 }
 
-/// `a · b` over the axes.
-fn dot<const D: usize>(a: &[f64; D], b: &[f64; D]) -> f64 {
-    (0..D).map(|k| a[k] * b[k]).sum()
-}
+impl DragEnd {
+    /// The vertical confirmation: `z` and the jump as `[down, 0]`.
+    pub fn vertical() -> Self {
+        DragEnd { one_axis: true, ..DragEnd::default() }
+    }
 
-impl<const D: usize> DragEnd<D> {
     /// This GPS epoch's `z` at `t` (None: no usable velocity or IMU, which
     /// restarts everything).
-    pub fn push(&mut self, t: f64, z: Option<[f64; D]>) {
+    pub fn push(&mut self, t: f64, z: Option<[f64; 2]>) {
         let Some(z) = z.filter(|z| t.is_finite() && z.iter().all(|x| x.is_finite())) else {
             self.recent.clear();
             self.pending = None;
@@ -123,7 +124,7 @@ impl<const D: usize> DragEnd<D> {
         }
         self.recent.push((t, z));
         if let Some(p) = self.pending.as_mut() {
-            let x = dot(&z, &p.u);
+            let x = z[0] * p.u[0] + z[1] * p.u[1];
             p.n_a += 1.0;
             p.sum_a += x;
             p.sum2_a += x * x;
@@ -133,15 +134,15 @@ impl<const D: usize> DragEnd<D> {
     /// A position episode opened at this epoch (`t`, the last `push`) on a
     /// jump of the position off its velocity track, `jump` (N, E, m): arm
     /// the confirmation. The newest entry is the first after the jump.
-    pub fn arm(&mut self, t: f64, jump: [f64; D]) {
+    pub fn arm(&mut self, t: f64, jump: [f64; 2]) {
         self.pending = None;
-        let len = dot(&jump, &jump).sqrt();
+        let len = (jump[0] * jump[0] + jump[1] * jump[1]).sqrt();
         let Some(&(tn, zn)) = self.recent.last() else { return };
         if !(len > 0.0 && len.is_finite()) || tn != t {
             return;
         }
-        let u: [f64; D] = core::array::from_fn(|k| jump[k] / len);
-        let along = |z: &[f64; D]| dot(z, &u);
+        let u = [jump[0] / len, jump[1] / len];
+        let along = |z: &[f64; 2]| z[0] * u[0] + z[1] * u[1];
         let before = || self.recent[..self.recent.len() - 1].iter().filter(|(ti, _)| t - ti <= BEFORE_S).map(|(_, z)| along(z));
         let n_b = before().count() as f64;
         if n_b < 2.0 {
@@ -188,20 +189,19 @@ impl<const D: usize> DragEnd<D> {
         // takes the jump's epoch and the `AFTER_S` past it; before: the
         // `BEFORE_S` ahead of that.
         let mean = |inside: &dyn Fn(f64) -> bool| {
-            let (mut n, mut s) = (0.0, [0.0; D]);
+            let (mut n, mut s) = (0.0, [0.0; 2]);
             for (_, z) in self.recent.iter().filter(|(t, _)| inside(tn - t)) {
                 n += 1.0;
-                for k in 0..D {
-                    s[k] += z[k];
-                }
+                s[0] += z[0];
+                s[1] += z[1];
             }
-            (n >= 2.0).then(|| s.map(|x| x / n))
+            (n >= 2.0).then(|| [s[0] / n, s[1] / n])
         };
         let after = mean(&|age| age <= AFTER_S);
         let before = mean(&|age| age > AFTER_S && age <= AFTER_S + BEFORE_S);
         let (Some(a), Some(b)) = (after, before) else { return };
         let lim = 9.0 * self.ms;
-        for k in 0..D {
+        for k in 0..if self.one_axis { 1 } else { 2 } {
             let x = ((a[k] - b[k]) * (a[k] - b[k])).fmin(lim);
             self.learnt += 1.0;
             let w = (1.0 / (self.learnt + PRIOR_N)).fmax(ALPHA);
@@ -346,6 +346,6 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(Pending<const D: usize> { t0, u, len, n_b, mean_b, ss_b, n_a, sum_a, sum2_a });
-    impl_codec!(DragEnd<const D: usize> { recent, pending, ms, learnt });
+    impl_codec!(Pending { t0, u, len, n_b, mean_b, ss_b, n_a, sum_a, sum2_a });
+    impl_codec!(DragEnd { recent, pending, ms, learnt, one_axis });
 }

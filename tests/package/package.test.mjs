@@ -48,12 +48,14 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // the baro levels' error model) adds 2,131 B: 301,018 B. Session 11's
 // (kept offsets, the tracks' origin) adds 1,077 B: 302,095 B; session 12's
 // (the offset kept on an unflagged fault's end, the origin measured on the
-// level before the jump, with the jump-size scale) 920 B: 303,015 B. The budget
+// level before the jump, with the jump-size scale) 920 B: 303,015 B, and
+// its vertical drag-off end (a second `DragEnd`, not a generic copy, which
+// cost 1,956 B) about 660 B more. The budget
 // guards today's size plus 0.5 KB: a
 // change that crosses it must find the bytes elsewhere, or raise it with
 // the reason, never past the goal, which the last test asserts.
 const FIRST_USE_GOAL = 307_200;
-const CORE_WASM_BUDGET = 303_500;
+const CORE_WASM_BUDGET = 304_200;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;
