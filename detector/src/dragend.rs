@@ -339,6 +339,36 @@ mod tests {
         d.push(10.2, None);
         assert!(!d.armed());
     }
+
+    /// The vertical instance learns the shift's RMS from its one axis: a
+    /// 5 Hz `z` of white σ 0.3 m/s shifts between two 2 s means by
+    /// 0.3·sqrt(1/11 + 1/10) ≈ 0.13 m/s. Pooled with the unused second
+    /// axis (always 0), as the horizontal instance would pool it, half of
+    /// the learnt shifts are 0 and σ comes out √2 too small: a vertical
+    /// drag's end would be confirmed on noise.
+    #[test]
+    fn the_vertical_instance_learns_its_shift_from_one_axis() {
+        let mut rng = Rng::new(3);
+        let (mut v, mut h) = (DragEnd::vertical(), DragEnd::default());
+        // The learnt mean square forgets over 100 shifts (20 s), which
+        // overlap: averaged over the 540 s after a minute of learning.
+        let (mut mv, mut mh, mut n) = (0.0, 0.0, 0.0);
+        for i in 0..3000 {
+            let t = i as f64 * 0.2;
+            let z = [0.3 * rng.normal(), 0.0];
+            for d in [&mut v, &mut h] {
+                d.push(t, Some(z));
+                d.learn();
+            }
+            if t >= 60.0 {
+                (mv, mh, n) = (mv + v.ms, mh + h.ms, n + 1.0);
+            }
+        }
+        let expected = 0.3 * (1.0f64 / 11.0 + 1.0 / 10.0).sqrt();
+        let (sv, sh) = ((mv / n).sqrt(), (mh / n).sqrt());
+        assert!((sv / expected - 1.0).abs() < 0.2, "vertical σ {sv:.3} against {expected:.3}");
+        assert!((sh * 2f64.sqrt() / sv - 1.0).abs() < 0.15, "pooled σ {sh:.3} against {sv:.3}/√2");
+    }
 }
 
 /// The snapshot codec of this file's state types ([`crate::codec`]).
