@@ -60,7 +60,7 @@ fn a_drag_off_end_at_under_three_sigma_is_confirmed() {
 /// with a 0.55 m/s jump of the vertical velocity, within one epoch's noise,
 /// so the return was judged as a step for the 60 s coast limit (108
 /// false-positive epochs). The confirmation on the velocity's mean now
-/// runs on the vertical axis too (`DragEnd::vertical`).
+/// runs on the vertical axis too (`dragend::DragEnds`).
 #[test]
 fn the_end_of_a_vertical_drag_off_is_confirmed_and_re_anchored() {
     let f = Flight::draw(Split::Tune, 246);

@@ -60,7 +60,7 @@ use crate::methods::{self, Decision, EpochInnovations, MahaWindow, Method, PoolS
 pub use crate::model::{has_signature, Model};
 use crate::sample::{range_of, Sample};
 use navguard_logs::decimal::Shortest;
-use crate::dragend::DragEnd;
+use crate::dragend::DragEnds;
 use crate::flatline::{self, Flatline};
 use crate::track::{undoes, VelocityTrack};
 
@@ -861,10 +861,9 @@ struct Consistency {
     baro_drift: DriftTest,
     /// The position ramping off its velocity track.
     ramp: RampTest,
-    /// The end of a horizontal drag-off, confirmed on the velocity's mean.
-    drag_end: DragEnd,
-    /// The same on the vertical axis (a vertical drag-off's end).
-    drag_end_v: DragEnd,
+    /// The end of a drag-off, confirmed on the velocity's mean
+    /// (horizontal and vertical).
+    drag_end: DragEnds,
     /// The baro's reading held bit for bit (a stuck sensor, see `flatline`).
     baro_flat: Flatline,
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
@@ -1148,8 +1147,7 @@ impl Consistency {
             baro_dop_level: VelocityTrack::default(),
             baro_drift: DriftTest::default(),
             ramp: RampTest::default(),
-            drag_end: DragEnd::default(),
-            drag_end_v: DragEnd::vertical(),
+            drag_end: DragEnds::default(),
             baro_flat: Flatline::default(),
             baro_epoch: None,
         }
@@ -1285,8 +1283,7 @@ impl Consistency {
     /// a drag-off's end (see `dragend`): the track's level moved with the
     /// truth's return, so its baseline moves to the fix.
     fn drag_ended(&mut self, t: f64, episode_active: bool) -> bool {
-        let h = episode_active && self.drag_end.confirmed(t, self.flight_time);
-        let v = episode_active && self.drag_end_v.confirmed(t, self.flight_time);
+        let [h, v] = if episode_active { self.drag_end.confirmed(t, self.flight_time) } else { [false; 2] };
         if h {
             self.track.rebase_axis(0);
             self.track.rebase_axis(1);
@@ -1306,21 +1303,8 @@ impl Consistency {
     fn arm_drag_end(&mut self, t: f64, opened_on_position: bool, step: &EpisodeStep) {
         if !step.fault || step.reset {
             self.drag_end.disarm();
-            self.drag_end_v.disarm();
         } else if opened_on_position {
-            // Each axis' confirmation judges its own part of the jump: the
-            // implied drag's age (`dragend::MIN_AGE_S`) rules out the small
-            // part a jump has on the other axes.
-            match self.track.jump() {
-                Some(j) => {
-                    self.drag_end.arm(t, [j[0], j[1]]);
-                    self.drag_end_v.arm(t, [j[2], 0.0]);
-                }
-                None => {
-                    self.drag_end.disarm();
-                    self.drag_end_v.disarm();
-                }
-            }
+            self.drag_end.arm(t, self.track.jump());
         }
     }
 
@@ -1416,11 +1400,9 @@ impl Consistency {
             Some(z) => ind.observe_imu(t, z),
             None => ind.clear_imu(),
         }
-        let z = z3.map(|z| [z[0], z[1]]);
         // The same `z` measures a drag-off's end (see `dragend`); an IMU gap
         // left changes out of `dv_imu`, so it restarts there.
-        self.drag_end.push(t, z.filter(|_| !imu_gap && !vel_withheld));
-        self.drag_end_v.push(t, z3.map(|z| [z[2], 0.0]).filter(|_| !imu_gap && !vel_withheld));
+        self.drag_end.push(t, z3.filter(|_| !imu_gap && !vel_withheld));
         ind.set_imu_fold(imu_dense && self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).
@@ -2584,7 +2566,6 @@ impl Detector {
             self.consistency.baro_drift.learn();
             self.consistency.ramp.learn();
             self.consistency.drag_end.learn();
-            self.consistency.drag_end_v.learn();
         }
         let fed = if step.reset {
             // Coasted too long to judge (or recovered): re-anchor on GPS.
@@ -3379,7 +3360,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, drag_end_v, baro_flat, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_flat, baro_epoch });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

@@ -102,7 +102,7 @@ impl Default for DragEnd {
 
 impl DragEnd {
     /// The vertical confirmation: `z` and the jump as `[down, 0]`.
-    pub fn vertical() -> Self {
+    fn vertical() -> Self {
         DragEnd { one_axis: true, ..DragEnd::default() }
     }
 
@@ -217,6 +217,60 @@ impl DragEnd {
     /// A confirmation is armed.
     pub fn armed(&self) -> bool {
         self.pending.is_some()
+    }
+}
+
+/// Both confirmations: the horizontal one on (N, E) and the vertical one
+/// on the down axis, each judging its own part of a jump (the implied
+/// drag's age, `MIN_AGE_S`, rules out the small part a jump has on the
+/// other axes). `z` and jumps are NED.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DragEnds {
+    h: DragEnd,
+    v: DragEnd,
+}
+
+impl Default for DragEnds {
+    fn default() -> Self {
+        DragEnds { h: DragEnd::default(), v: DragEnd::vertical() }
+    }
+}
+
+impl DragEnds {
+    /// This GPS epoch's `z` (see `DragEnd::push`).
+    pub fn push(&mut self, t: f64, z: Option<[f64; 3]>) {
+        self.h.push(t, z.map(|z| [z[0], z[1]]));
+        self.v.push(t, z.map(|z| [z[2], 0.0]));
+    }
+
+    /// Arm both on a position episode's jump (see `DragEnd::arm`); none
+    /// known disarms them.
+    pub fn arm(&mut self, t: f64, jump: Option<[f64; 3]>) {
+        match jump {
+            Some(j) => {
+                self.h.arm(t, [j[0], j[1]]);
+                self.v.arm(t, [j[2], 0.0]);
+            }
+            None => self.disarm(),
+        }
+    }
+
+    /// Which ends are confirmed at this epoch: horizontal, vertical (see
+    /// `DragEnd::confirmed`).
+    pub fn confirmed(&mut self, t: f64, flown: f64) -> [bool; 2] {
+        [self.h.confirmed(t, flown), self.v.confirmed(t, flown)]
+    }
+
+    /// A normal epoch (see `DragEnd::learn`).
+    pub fn learn(&mut self) {
+        self.h.learn();
+        self.v.learn();
+    }
+
+    /// Disarm both.
+    pub fn disarm(&mut self) {
+        self.h.disarm();
+        self.v.disarm();
     }
 }
 
@@ -378,4 +432,5 @@ mod codec_impls {
 
     impl_codec!(Pending { t0, u, len, n_b, mean_b, ss_b, n_a, sum_a, sum2_a });
     impl_codec!(DragEnd { recent, pending, ms, learnt, one_axis });
+    impl_codec!(DragEnds { h, v });
 }

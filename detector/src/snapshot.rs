@@ -69,7 +69,7 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// they began (`track::VelocityTrack::back_to_origin`). 19: the tracks learn
 /// their epoch-to-epoch change (`VelocityTrack::ms_step`), the scale a
 /// return jump is measured on. 20: a drag-off's end is confirmed on the
-/// vertical too (`dragend::DragEnd::vertical`).
+/// vertical too (`dragend::DragEnds`).
 pub const VERSION: u32 = 20;
 
 #[derive(Clone)]

@@ -156,12 +156,11 @@ impl VelocityTrack {
         }
         let jump: [f64; 3] = core::array::from_fn(|a| d[a] - p[a]);
         let off: [f64; 3] = core::array::from_fn(|a| self.base[a] - self.origin[a]);
-        let by_base = self.z(&self.origin) > NEAR && undoes(&jump, &off, 0.0) && -self.steps_along(&jump, &off) > FAR;
+        // The jump takes back most of `o`, and is a jump, not one fix's noise.
+        let takes_back = |o: &[f64; 3]| undoes(&jump, o, 0.0) && -self.steps_along(&jump, o) > FAR;
+        let by_base = self.z(&self.origin) > NEAR && takes_back(&off);
         let level: [f64; 3] = core::array::from_fn(|a| p[a] - self.origin[a]);
-        let by_level = self.z_from(&p, &self.origin) > NEAR
-            && undoes(&jump, &level, 0.0)
-            && -self.steps_along(&jump, &level) > FAR
-            && self.steps_along(&off, &level) > NEAR;
+        let by_level = self.z_from(&p, &self.origin) > NEAR && takes_back(&level) && self.steps_along(&off, &level) > NEAR;
         if (by_base || by_level) && self.z_from(&d, &self.origin) < NEAR {
             self.base = self.origin;
             self.outlying = 0.0;
