@@ -26,7 +26,7 @@
 //
 // `push(sample)` packs the plain object into the detector's row buffer in
 // wasm memory in JS (cheap property reads) and runs it with one call with no
-// arguments, instead of 27 property lookups from inside wasm. Same results,
+// arguments, instead of 28 property lookups from inside wasm. Same results,
 // same errors.
 import * as core from './navguard_core.js';
 import * as audit from './navguard_audit.js';
@@ -252,7 +252,7 @@ function pushSample(det, sample) {
   }
   const row = det._row;
   row.fill(NaN);
-  // Walk the sample's own keys: rows are sparse (an IMU row has ~10 of 27).
+  // Walk the sample's own keys: rows are sparse (an IMU row has ~10 of 28).
   // A getter here that calls back into this detector is refused (BUSY); a
   // getter or Proxy trap that throws anything becomes an Error naming the row.
   let bad = null;

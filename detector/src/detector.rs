@@ -438,6 +438,8 @@ struct Fix {
     epv: f64,
     /// The receiver's own time of the fix, s (NaN when the log has none).
     gps_time: f64,
+    /// Its speed accuracy claim, m/s (NaN when absent).
+    sacc: f64,
     /// Satellites in use and fix type (2 = 2D, 3 = 3D), NaN when absent.
     sats: f64,
     fix_type: f64,
@@ -452,6 +454,7 @@ impl Fix {
             eph: s.eph,
             epv: if s.epv.is_finite() { s.epv } else { 1.5 * s.eph },
             gps_time: s.gps_time,
+            sacc: s.sacc,
             sats: s.sats,
             fix_type: s.fix,
         }
@@ -474,12 +477,15 @@ impl Fix {
 /// after it is not judged against a dragged estimate (battery: 28% of all
 /// false-positive epochs followed a degraded fix). Only a ratio is used: no
 /// receiver's absolute eph is assumed.
+///
+/// The speed accuracy claim (`sacc`, where the log has one) scales the
+/// velocity test the same way (see `IndicatorEngine::set_speed_claim`).
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
 struct ReceiverQuality {
-    /// Learnt usual ln(eph / 1 m); None until the first claim.
-    ln_eph: Option<f64>,
-    /// Claims learnt from (saturating): a fast start, as σ_Δ has.
-    learnt: u32,
+    /// The usual eph (m).
+    pos: UsualClaim,
+    /// The usual speed accuracy claim (m/s).
+    speed: UsualClaim,
     /// Consecutive fixes the receiver called degraded, up to the last.
     degraded_run: u32,
     /// The receiver declared its last fix degraded (`declares_degraded`).
@@ -512,14 +518,64 @@ const QUALITY_DECLARED: f64 = 3.0;
 /// Satellites at or below which a fix is degraded by its own count.
 const MAX_DEGRADED_SATS: f64 = 4.0;
 
+/// One of the receiver's accuracy claims (eph m, sAcc m/s) learnt as its
+/// usual level: a mean of ln(claim), so only ratios are used.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+struct UsualClaim {
+    /// Learnt usual ln(claim); None until the first claim.
+    ln: Option<f64>,
+    /// Claims learnt from (saturating): a fast start, as σ_Δ has.
+    learnt: u32,
+}
+
+impl UsualClaim {
+    /// How many times worse than usual the receiver calls a claim of `x`
+    /// (1 when it is no worse, or says nothing).
+    fn scale(&self, x: f64) -> f64 {
+        match self.ln {
+            Some(l) if x.is_finite() && x > 0.0 => libm::exp(libm::log(x) - l).clamp(1.0, QUALITY_MAX_SCALE),
+            _ => 1.0,
+        }
+    }
+
+    /// Past the fast start: the usual level forgets at `QUALITY_ALPHA`.
+    fn learnt(&self) -> bool {
+        f64::from(self.learnt) * QUALITY_ALPHA >= 1.0
+    }
+
+    /// Learn a claim from a fix with a normal verdict. Claims of a degraded
+    /// fix are not learnt (past the first few), so the usual level follows
+    /// a receiver that improves at once and one that worsens only slowly.
+    fn learn(&mut self, x: f64) {
+        if !(x.is_finite() && x > 0.0) {
+            return;
+        }
+        let lx = libm::log(x);
+        let Some(l) = self.ln else {
+            self.ln = Some(lx);
+            self.learnt = 1;
+            return;
+        };
+        if self.scale(x) >= QUALITY_DEGRADED && self.learnt() {
+            return;
+        }
+        let w = QUALITY_ALPHA.fmax(1.0 / (f64::from(self.learnt) + 1.0));
+        self.ln = Some(l + w * (lx - l));
+        self.learnt = self.learnt.saturating_add(1);
+    }
+}
+
 impl ReceiverQuality {
     /// How many times worse than usual the receiver calls a fix of `eph` m
     /// (1 when it is no worse, or says nothing).
     fn scale(&self, eph: f64) -> f64 {
-        match self.ln_eph {
-            Some(l) if eph.is_finite() && eph > 0.0 => libm::exp(libm::log(eph) - l).clamp(1.0, QUALITY_MAX_SCALE),
-            _ => 1.0,
-        }
+        self.pos.scale(eph)
+    }
+
+    /// How many times worse than usual the receiver calls its velocity of
+    /// speed accuracy `sacc` m/s (1 when no worse, or it says nothing).
+    fn speed_scale(&self, sacc: f64) -> f64 {
+        self.speed.scale(sacc)
     }
 
     /// Whether the receiver, after `QUALITY_RUN` or more fixes it called
@@ -544,7 +600,7 @@ impl ReceiverQuality {
     /// the fix (down-weighted, see `scale`); this is the receiver's word,
     /// reported as it is, like a no-fix report.
     fn declares_degraded(&mut self, fix: &Fix) -> bool {
-        let learnt = f64::from(self.learnt) * QUALITY_ALPHA >= 1.0;
+        let learnt = self.pos.learnt();
         let says = fix.self_declared_degraded();
         self.acquired |= !says;
         self.declared = self.acquired && (says || (learnt && self.scale(fix.eph) >= QUALITY_DECLARED));
@@ -564,25 +620,10 @@ impl ReceiverQuality {
         !self.declared && self.last_declared.is_some_and(|d| t - d <= DECLARED_RETURN_S)
     }
 
-    /// Learn a claim from a fix with a normal verdict. Claims of a degraded
-    /// fix are not learnt (past the first few), so the usual level follows
-    /// a receiver that improves at once and one that worsens only slowly.
-    fn learn(&mut self, eph: f64) {
-        if !(eph.is_finite() && eph > 0.0) {
-            return;
-        }
-        let x = libm::log(eph);
-        let Some(l) = self.ln_eph else {
-            self.ln_eph = Some(x);
-            self.learnt = 1;
-            return;
-        };
-        if self.scale(eph) >= QUALITY_DEGRADED && f64::from(self.learnt) * QUALITY_ALPHA >= 1.0 {
-            return;
-        }
-        let w = QUALITY_ALPHA.fmax(1.0 / (f64::from(self.learnt) + 1.0));
-        self.ln_eph = Some(l + w * (x - l));
-        self.learnt = self.learnt.saturating_add(1);
+    /// Learn the claims of a fix with a normal verdict.
+    fn learn(&mut self, fix: &Fix) {
+        self.pos.learn(fix.eph);
+        self.speed.learn(fix.sacc);
     }
 }
 
@@ -1330,7 +1371,7 @@ impl Consistency {
     /// references at this fix (see `altitude_vote`).
     /// `imu_dense`: the IMU is logged often enough to judge (see
     /// `IMU_MAX_PERIOD_S`).
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool, imu_dense: bool) -> (Indicators, bool) {
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool, imu_dense: bool, speed_claim: f64) -> (Indicators, bool) {
         let (t, y) = (fix.t, fix.y);
         // The receiver's own time, when the log has it, measures the clock
         // whatever the vehicle does (inside episodes too).
@@ -1375,7 +1416,7 @@ impl Consistency {
         // Not across a fix the receiver calls degraded: its position walks
         // off by design, and the walk's end would read as a ramp.
         let ramp = match (track_dt, self.track.d()) {
-            (Some(dt), Some(d)) if !declared => self.ramp.push(dt, d, fix.eph, fix.epv),
+            (Some(dt), Some(d)) if !declared => self.ramp.push(dt, d, [fix.eph, fix.epv], speed_claim),
             _ => {
                 self.ramp.clear();
                 f64::NAN
@@ -1652,10 +1693,10 @@ impl Withheld {
     }
 
     /// The filter update stage: feed the fix's groups that are not
-    /// withheld, with σ scaled by `k` (see `ReceiverQuality`); the
-    /// indicator engine learns each fed axis' posterior residual. A failed
-    /// update leaves the rest unfed.
-    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6], k: f64) -> Result<(), FilterError> {
+    /// withheld, position σ scaled by `k` and velocity σ by `k_vel` (see
+    /// `ReceiverQuality`); the indicator engine learns each fed axis'
+    /// posterior residual. A failed update leaves the rest unfed.
+    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6], [k, k_vel]: [f64; 2]) -> Result<(), FilterError> {
         if !self.gps_pos() {
             kf.update_position_scaled(&fix.y, k)?;
             let p = kf.position();
@@ -1667,7 +1708,7 @@ impl Withheld {
         }
         match (&fix.vel, self.gps_vel()) {
             (Some(v), false) => {
-                kf.update_velocity_scaled(v, k)?;
+                kf.update_velocity_scaled(v, k_vel)?;
                 let vel = kf.velocity();
                 for a in 0..3 {
                     ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
@@ -2478,6 +2519,8 @@ impl Detector {
             self.start_filter(&fix);
             return Output { t: fix.t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
         };
+        let speed_claim = self.quality.speed_scale(fix.sacc);
+        self.ind.set_speed_claim(speed_claim);
         let res = self.last_est.residuals(kf, &mut self.ind, &fix);
         res.write(&mut self.resid);
         let vel_withheld = self.episode.withheld.gps_vel();
@@ -2486,7 +2529,7 @@ impl Detector {
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
-        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared, imu_dense);
+        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared, imu_dense, speed_claim);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let mut verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -2572,10 +2615,11 @@ impl Detector {
             kf.reset_to(&fix.y, fix.vel.as_ref());
             Ok(())
         } else {
-            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r, self.quality.scale(fix.eph))
+            let k = self.quality.scale(fix.eph);
+            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r, [k, k])
         };
         if !step.fault {
-            self.quality.learn(fix.eph);
+            self.quality.learn(&fix);
         }
         self.last_est.set_epoch(kf);
         if step.reset {
@@ -2725,6 +2769,8 @@ fn row_is_plainly_valid(s: &Sample) -> bool {
     ok &= !s.label.is_infinite();
     const GT: (f64, f64) = range_of(26);
     ok &= s.gps_time.is_nan() | ((s.gps_time >= GT.0) & (s.gps_time <= GT.1));
+    const SA: (f64, f64) = range_of(27);
+    ok &= s.sacc.is_nan() | ((s.sacc >= SA.0) & (s.sacc <= SA.1));
     ok && group(1, 3) && group(4, 3) && group(7, 3) && group(14, 3) && group(17, 3) && group(20, 4)
 }
 
@@ -2830,8 +2876,8 @@ mod tests {
     }
 
     #[test]
-    fn receiver_quality_scales_by_the_ratio_and_does_not_learn_a_degraded_fix() {
-        let mut q = ReceiverQuality::default();
+    fn a_usual_claim_scales_by_the_ratio_and_does_not_learn_a_degraded_fix() {
+        let mut q = UsualClaim::default();
         assert_eq!(q.scale(7.0), 1.0, "nothing learnt: no scale");
         for _ in 0..100 {
             q.learn(1.2);
@@ -2856,11 +2902,11 @@ mod tests {
     #[test]
     fn the_receiver_declares_a_degraded_fix_in_its_own_fields() {
         let mut q = ReceiverQuality::default();
-        let fix = |eph: f64, sats: f64, fix_type: f64| Fix { t: 0.0, y: Vector3::zeros(), vel: None, eph, epv: f64::NAN, gps_time: f64::NAN, sats, fix_type };
+        let fix = |eph: f64, sats: f64, fix_type: f64| Fix { t: 0.0, y: Vector3::zeros(), vel: None, eph, epv: f64::NAN, gps_time: f64::NAN, sacc: f64::NAN, sats, fix_type };
         // Still acquiring (2D, then 4 satellites): not declared.
         assert!(!q.declares_degraded(&fix(5.0, 9.0, 2.0)) && !q.declares_degraded(&fix(5.0, 4.0, 3.0)));
         for _ in 0..60 {
-            q.learn(1.0);
+            q.pos.learn(1.0);
             assert!(!q.declares_degraded(&fix(1.0, 9.0, 3.0)));
         }
         assert!(!q.declares_degraded(&fix(2.9, 9.0, 3.0)), "2.9x its usual claim is not a declaration");
@@ -2885,13 +2931,13 @@ mod tests {
         #[test]
         fn fast_validation_agrees_with_the_detailed_checks(
             present in proptest::collection::vec(any::<bool>(), 8),
-            vals in proptest::collection::vec(-1.0f64..1.0, 27),
-            edits in proptest::collection::vec((0..27usize, 0..7usize), 0..4),
+            vals in proptest::collection::vec(-1.0f64..1.0, 28),
+            edits in proptest::collection::vec((0..28usize, 0..7usize), 0..4),
         ) {
             let mut s = Sample::at(10.0);
             // Groups: lat/lon/alt, pn/pe/pd, v, accel, gyro, quaternion, then
-            // single columns fix..epv and baro, label, gps_time.
-            let groups: [&[usize]; 8] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23], &[10, 11, 12, 13], &[24, 25, 26]];
+            // single columns fix..epv and baro, label, gps_time, sacc.
+            let groups: [&[usize]; 8] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23], &[10, 11, 12, 13], &[24, 25, 26, 27]];
             for (g, cols) in groups.iter().enumerate() {
                 if present[g] {
                     for &c in cols.iter() {
@@ -3356,7 +3402,8 @@ mod codec_impls {
     impl_codec!(Stats { rows, gps_epochs, imu_rows, baro_rows, retrains, filter_resets, data_gaps, filter_errors });
     impl_codec!(Ring { buf, head, len });
     impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until });
-    impl_codec!(ReceiverQuality { ln_eph, learnt, degraded_run, declared, acquired, last_declared });
+    impl_codec!(ReceiverQuality { pos, speed, degraded_run, declared, acquired, last_declared });
+    impl_codec!(UsualClaim { ln, learnt });
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });

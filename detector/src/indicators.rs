@@ -143,6 +143,7 @@
 //! leaves), re-summed exactly once per window length to shed rounding, so the
 //! per-epoch cost is O(1) in `w`.
 
+use crate::window::RecentMax;
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
@@ -414,6 +415,11 @@ pub struct IndicatorEngine {
     /// folded in, and the largest group R so.
     r_vel_unfolded: f64,
     r_unfolded: f64,
+    /// The receiver's speed accuracy claim against its usual one at this
+    /// epoch (≥ 1, see `set_speed_claim`), and its largest over the IMU
+    /// test's longest window.
+    speed_claim: f64,
+    imu_claim: RecentMax,
 }
 
 /// Position–velocity consistency over a long window (see the module docs).
@@ -928,6 +934,39 @@ impl IndicatorEngine {
             imu_fold: false,
             r_vel_unfolded: f64::NAN,
             r_unfolded: 0.0,
+            speed_claim: 1.0,
+            imu_claim: RecentMax::default(),
+        }
+    }
+
+    /// The receiver calls this epoch's velocity `k` times less accurate
+    /// than usual (its speed accuracy claim over its learnt usual one,
+    /// ≥ 1). Every test whose noise is the GPS velocity's is judged against
+    /// `k` times its σ: the velocity axes' departures, the position–velocity
+    /// mismatch (it integrates the velocity) and the IMU consistency (its
+    /// windows start and end on a GPS velocity: by the largest claim over
+    /// its window). Their σ still learn the raw changes.
+    ///
+    /// Why: at take-off a u-blox receiver's sAcc rose from 0.25 to 2.1 m/s
+    /// for 4 s (real log 26-11), and a σ_Δ learnt on the ground flagged
+    /// that velocity noise as a fault. Learnt in units of the claim
+    /// instead, the σ came out small on the real plane log, whose sAcc
+    /// wanders 0.3–0.9 m/s with no matching change in its noise, and a
+    /// healthy 0.5 s was flagged. The position's own claim (eph) is not
+    /// used here: the detector already weighs and declares a degraded fix
+    /// by it (`ReceiverQuality`), and scaling these tests by it too hid the
+    /// position–velocity incoherence of declared stretches (battery tune
+    /// #1287, +76 false epochs).
+    pub fn set_speed_claim(&mut self, k: f64) {
+        self.speed_claim = if k.is_finite() { k.fmax(1.0) } else { 1.0 };
+    }
+
+    /// The claim scale that applies to an axis (the velocity axes only).
+    fn claim(&self, axis: usize) -> f64 {
+        if group_of(axis) == 1 {
+            self.speed_claim
+        } else {
+            1.0
         }
     }
 
@@ -979,7 +1018,7 @@ impl IndicatorEngine {
     /// since the previous epoch, and its prior variance `p_prior`. Returns the
     /// normalised departure `d`.
     pub fn observe(&mut self, axis: usize, r: f64, m: f64, p_prior: f64) -> f64 {
-        let sigma = self.sigma(axis);
+        let sigma = self.sigma(axis) * self.claim(axis);
         let Some(a) = self.axes.get_mut(axis) else {
             return 0.0;
         };
@@ -1052,6 +1091,8 @@ impl IndicatorEngine {
     /// axis: GPS position change minus the trapezoid of the GPS velocities
     /// over the interval, m).
     pub fn observe_pv(&mut self, u: [f64; 3], into_sum: bool) {
+        let k = self.speed_claim;
+        let u = u.map(|x| x / k);
         self.pv.note(u);
         if into_sum {
             self.pv.push(u);
@@ -1134,7 +1175,9 @@ impl IndicatorEngine {
         // with the horizontal alone).
         let v = if self.imu_v.learnt() >= IMU_ARM_WINDOWS { v } else { f64::NAN };
         self.imu_v_leads = v > h;
-        let st = h.fmax(v);
+        // The GPS velocity's noise is in both ends of the window's change:
+        // the worst claim over the window scales it.
+        let st = h.fmax(v) / self.imu_claim.push(t, self.speed_claim, IMU_V_SPAN);
         if st.is_finite() {
             self.imu_pending = if self.imu_pending.is_finite() { self.imu_pending.fmax(st) } else { st };
         }
@@ -1625,7 +1668,7 @@ mod codec_impls {
     impl_codec!(Indicators { r, c, r_group, c_group, inc_group, pv, baro_cons, imu, r_imu });
     impl_codec!(AxisState { prev, r_ref, p_ref, p_peak, ms, last_r, has_prev, has_ref, learnt });
     impl_codec!(IndicatorSettings { window, floor, initial, alpha });
-    impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, imu_v, imu_v_leads, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded });
+    impl_codec!(IndicatorEngine { set, axes, long, short, pending, pending_any, last, pv, baro, imu, imu_v, imu_v_leads, baro_gps, baro_gps_pending, baro_pending, imu_pending, imu_fold, r_vel_unfolded, r_unfolded, speed_claim, imu_claim });
     impl_codec!(PvTest { ring, head, len, sum, since_resum, ms, ms_u, last_u, inc, inc_len, inc_head, inc_cap, stat, learnt_u, learnt_s });
     impl_codec!(LagTest<const D: usize> { ring, motion, allow, head, len, span, ms, floor, alpha, hold, rate, tau, t_rate, last_s, last_dt, last_t, learnt, fast_start });
 }

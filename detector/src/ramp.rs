@@ -14,8 +14,9 @@
 //!
 //! So, like the baro's drift (`drift`): the change of `d` (smoothed over
 //! `SMOOTH_S`) over the last `SPAN_S`, horizontal and vertical apart, over
-//! a σ learnt slowly from a prior and never below the receiver's accuracy
-//! claim. A ramp is called
+//! a σ learnt slowly from a prior, scaled by the receiver's speed accuracy
+//! claim against its usual one (`d` integrates the velocity), and never
+//! below its position accuracy claim. A ramp is called
 //! only when it is one: the change over the last `RECENT_S` (see
 //! `window`), scaled to the window, points the same way and is no more
 //! than `MAX_RATIO` times the window's change (a jump inside the last
@@ -32,7 +33,7 @@
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
-use crate::window::{learn_axes, learn_ms, sigma_of, Entry, Window, SPAN_S, TAU_S};
+use crate::window::{learn_axes, learn_ms, sigma_of, Entry, RecentMax, Window, SPAN_S, TAU_S};
 
 /// Largest recent-to-window ratio of a ramp (a jump gives 2).
 const MAX_RATIO: f64 = 1.6;
@@ -79,6 +80,13 @@ pub struct RampTest {
     dt: f64,
     /// The receiver's claims (horizontal, vertical), m; NaN when none.
     claim: [f64; 2],
+    /// How many times worse than usual the receiver called its velocity at
+    /// worst over about the last `SPAN_S` (≥ 1; 0 before any fix reads as
+    /// 1): `d` integrates the velocity over the window, so its change
+    /// carries the window's worst claim, not only the last fix's (real log
+    /// 26-11: sAcc 2-3 m/s at 70-80 s, 0.5 m/s by 84 s, while the window
+    /// still held the 8-10 m the track had drifted).
+    worse: RecentMax,
     judging: bool,
     /// The arm that called the ramp being judged (0 horizontal, 1
     /// vertical): its return ends it, whatever the other axis wandered
@@ -139,14 +147,20 @@ impl RampTest {
         self.jump_t.is_some_and(|tj| self.t - tj < SPAN_S + 2.0 * SMOOTH_S)
     }
 
+    /// σ of arm `k`: learnt (never below the floor) times how much worse
+    /// than usual the receiver called its velocity over the window, and
+    /// never below its position accuracy claim.
     fn sigma(&self, k: usize) -> f64 {
-        sigma_of(self.ms[k], SIGMA0_M[k], FLOOR_M[k], self.claim[k])
+        let s = sigma_of(self.ms[k], SIGMA0_M[k], FLOOR_M[k], f64::NAN) * self.worse.value().fmax(1.0);
+        if self.claim[k] > s { self.claim[k] } else { s }
     }
 
     /// One GPS epoch `dt` true s after the last, with the track's `d` (m,
-    /// NED) and the receiver's claims `eph`, `epv` (m, NaN when none).
-    /// Returns the ramp statistic (NaN while the window is short).
-    pub fn push(&mut self, dt: f64, d: [f64; 3], eph: f64, epv: f64) -> f64 {
+    /// NED), the receiver's claims `eph`, `epv` (m, NaN when none) and how
+    /// many times worse than usual it calls its velocity (`worse` ≥ 1, see
+    /// `ReceiverQuality`). Returns the ramp statistic (NaN while the
+    /// window is short).
+    pub fn push(&mut self, dt: f64, d: [f64; 3], [eph, epv]: [f64; 2], worse: f64) -> f64 {
         self.last = [f64::NAN; 2];
         self.pending = None;
         self.returned = false;
@@ -158,6 +172,7 @@ impl RampTest {
         self.t += dt;
         self.dt = dt;
         let t = self.t;
+        self.worse.push(t, worse.fmax(1.0), SPAN_S);
         let w = (dt / SMOOTH_S).fmin(1.0);
         let raw = d;
         let before = self.smooth;
@@ -254,6 +269,7 @@ impl RampTest {
         if !(self.last_span <= 1.5 * SPAN_S) || self.jumped() {
             return;
         }
+        // Learnt raw, as σ_Δ is (see `IndicatorEngine::set_speed_claim`).
         let sigma = [self.sigma(0), self.sigma(1)];
         learn_axes(&mut self.ms, &self.last, sigma, w);
     }
@@ -286,7 +302,7 @@ mod tests {
                 let t = i as f64 * 0.2;
                 let mut d = [noise(i, 0.5), noise(i + 7, 0.5), noise(i + 13, 0.5)];
                 d[axis] += f(t);
-                let s = r.push(0.2, d, eph, f64::NAN);
+                let s = r.push(0.2, d, [eph, f64::NAN], 1.0);
                 if !(s >= RAMP_Z) {
                     r.learn();
                 }
@@ -390,5 +406,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, judging, arm, returned, dev_ms, dev, jump_t, restarted });
+    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, worse, judging, arm, returned, dev_ms, dev, jump_t, restarted });
 }

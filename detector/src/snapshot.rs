@@ -69,8 +69,10 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// they began (`track::VelocityTrack::back_to_origin`). 19: the tracks learn
 /// their epoch-to-epoch change (`VelocityTrack::ms_step`), the scale a
 /// return jump is measured on. 20: a drag-off's end is confirmed on the
-/// vertical too (`dragend::DragEnds`).
-pub const VERSION: u32 = 20;
+/// vertical too (`dragend::DragEnds`). 21: the receiver's usual speed
+/// accuracy claim (`ReceiverQuality::speed`) and the epoch's claim scale in
+/// the indicator engine.
+pub const VERSION: u32 = 21;
 
 #[derive(Clone)]
 struct Header {

@@ -108,6 +108,35 @@ impl Window {
     }
 }
 
+/// The largest of a series over about the last `span` s: the value held
+/// until a larger one comes or it is `span` old (then the current value
+/// takes over, so an older, smaller peak in between is forgotten early).
+/// Two numbers, not a ring: it scales a test's σ by the worst accuracy the
+/// receiver claimed over the test's window (see
+/// `IndicatorEngine::set_speed_claim`), where a little early forgetting
+/// only flags sooner.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+pub struct RecentMax {
+    value: f64,
+    t: f64,
+}
+
+impl RecentMax {
+    /// Note `x` at time `t` (s); returns the held largest (NaN `x` counts
+    /// as none: the held value stays).
+    pub fn push(&mut self, t: f64, x: f64, span: f64) -> f64 {
+        if x >= self.value || (t - self.t > span && !x.is_nan()) {
+            (self.value, self.t) = (x, t);
+        }
+        self.value
+    }
+
+    /// The held largest (0 before any).
+    pub fn value(&self) -> f64 {
+        self.value
+    }
+}
+
 /// One learning step of a mean square: `ms` (0 before any: the current σ
 /// `sg` stands in), from a change `s`, winsorised at 3σ, with weight `w`.
 pub fn learn_ms(ms: f64, s: f64, sg: f64, w: f64) -> f64 {
@@ -141,6 +170,17 @@ mod tests {
 
     fn at(t: f64, x: f64) -> Entry {
         Entry { t, x: [x, 0.0, 0.0], motion: Motion::default() }
+    }
+
+    #[test]
+    fn recent_max_holds_a_peak_for_its_span_then_follows_the_series() {
+        let mut m = RecentMax::default();
+        let xs = [1.0, 4.0, 2.0, f64::NAN, 3.0, 1.5, 1.2];
+        let held: Vec<f64> = xs.iter().enumerate().map(|(i, &x)| m.push(i as f64, x, 2.5)).collect();
+        // 4 at t = 1 is held to t = 3.5; at t = 4 the current 3 takes over
+        // (NaN at t = 3 changed nothing), then 3 is held to t = 6.5.
+        assert_eq!(held, [1.0, 4.0, 4.0, 4.0, 3.0, 3.0, 3.0]);
+        assert_eq!(m.push(7.0, 1.1, 2.5), 1.1);
     }
 
     #[test]
@@ -182,4 +222,5 @@ mod codec_impls {
     impl_codec!(Motion { speed2, climb, height });
     impl_codec!(Entry { t, x, motion });
     impl_codec!(Window { ring, recent });
+    impl_codec!(RecentMax { value, t });
 }

@@ -31,7 +31,7 @@ impl<'a> Arbitrary<'a> for Num {
 }
 
 /// Plausible base and step per column (contract order, see `COLUMNS`).
-const BASE: [(f64, f64); 27] = [
+const BASE: [(f64, f64); 28] = [
     (0.0, 1e-3),                                    // t (a step, see below)
     (47.0, 1e-6), (8.0, 1e-6), (500.0, 0.01),       // lat lon alt
     (0.0, 0.05), (0.0, 0.05), (0.0, 0.05),          // pn pe pd
@@ -42,6 +42,7 @@ const BASE: [(f64, f64); 27] = [
     (1.0, 1e-4), (0.0, 1e-4), (0.0, 1e-4), (0.0, 1e-4), // qw qx qy qz
     (500.0, 0.01), (0.0, 1.0),                      // baro label
     (1.3e9, 0.2),                                   // gps_time
+    (0.3, 0.01),                                    // sacc
 ];
 
 impl Num {
@@ -68,7 +69,7 @@ struct Row {
     /// Time step to the previous row in ms (or a raw time).
     dt: Num,
     groups: u8,
-    vals: [Num; 27],
+    vals: [Num; 28],
     /// Emit the row this many more times (0..=63), each `dt` later and with
     /// the position moved by `drift` steps: long flights from short inputs.
     repeat: u8,
@@ -99,8 +100,8 @@ struct ModelEdit {
     d2: Vec<[i8; 2]>,
 }
 
-/// Column indices per group bit: GPS LLA, NED pos, vel, fix/sats/eph/epv/gps_time, accel, gyro, quat, baro+label.
-const GROUPS: [&[usize]; 8] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[10, 11, 12, 13, 26], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23], &[24, 25]];
+/// Column indices per group bit: GPS LLA, NED pos, vel, fix/sats/eph/epv/gps_time/sacc, accel, gyro, quat, baro+label.
+const GROUPS: [&[usize]; 8] = [&[1, 2, 3], &[4, 5, 6], &[7, 8, 9], &[10, 11, 12, 13, 26, 27], &[14, 15, 16], &[17, 18, 19], &[20, 21, 22, 23], &[24, 25]];
 
 fn config_json(c: &Cfg, u: &mut Unstructured) -> String {
     let mut m = serde_json::Map::new();

@@ -27,9 +27,12 @@
 //!   of change of GPS altitude), `eph` (see below). A row with Status < 2 keeps
 //!   position and velocity NaN: it means "no fix at this instant".
 //! * `eph`: `GPA.HAcc` (m) when a `GPA` message accompanies the fix (newer
-//!   logs); otherwise HDop is used as a proxy in metres, i.e. a user range
-//!   error of 1 m (`eph = HDop * 1 m`). HDop 99.99 ("unknown") passes through
-//!   as a large eph; HDop 0 gives NaN. `epv` only from `GPA.VAcc`.
+//!   logs), or `UBX3.hAcc` when a `UBX3` record of the same time precedes it
+//!   (2014-era logs with a u-blox receiver); otherwise HDop is used as a
+//!   proxy in metres, i.e. a user range error of 1 m (`eph = HDop * 1 m`).
+//!   HDop 99.99 ("unknown") passes through as a large eph; HDop 0 gives NaN.
+//!   `epv` only from `GPA.VAcc` / `UBX3.vAcc`, `sacc` (m/s) only from
+//!   `GPA.SAcc` / `UBX3.sAcc`.
 //! * `IMU` (instance 0; older logs name further IMUs `IMU2`, `IMU3`, which
 //!   are only counted) -> `ax..az` (AccX..Z, m/s², body FRD) and `gx..gz`
 //!   (GyrX..Z, rad/s).
@@ -250,6 +253,7 @@ impl DataflashStream {
             Kind::Fmtu => on_fmtu(msg, ty, &mut self.types),
             Kind::Gps => self.out.on_gps(layout, msg, sink),
             Kind::Gpa => self.out.on_gpa(layout, msg),
+            Kind::Ubx3 => self.out.on_ubx3(layout, msg),
             Kind::Imu => self.out.on_imu(layout, msg, sink),
             Kind::Att => self.out.on_att(layout, msg, sink),
             Kind::Baro => self.out.on_baro(layout, msg, sink),
@@ -325,6 +329,7 @@ enum Kind {
     Fmtu,
     Gps,
     Gpa,
+    Ubx3,
     Imu,
     Att,
     Baro,
@@ -341,6 +346,7 @@ fn kind_of(name: &str) -> Kind {
         "FMTU" => Kind::Fmtu,
         "GPS" => Kind::Gps,
         "GPA" => Kind::Gpa,
+        "UBX3" => Kind::Ubx3,
         "IMU" => Kind::Imu,
         "ATT" => Kind::Att,
         "BARO" => Kind::Baro,
@@ -373,6 +379,10 @@ const EV_ID: usize = 0;
 const GPA_HACC: usize = 0;
 const GPA_VACC: usize = 1;
 const GPA_VV: usize = 2;
+const GPA_SACC: usize = 3;
+const UBX3_HACC: usize = 0;
+const UBX3_VACC: usize = 1;
+const UBX3_SACC: usize = 2;
 const IMU_ACCX: usize = 0;
 const IMU_GYRX: usize = 3;
 const ATT_ROLL: usize = 0;
@@ -400,7 +410,8 @@ fn role_names(kind: Kind) -> &'static [&'static [&'static str]] {
             &["GWk", "Week"],
             &["GMS", "TimeMS"],
         ],
-        Kind::Gpa => &[&["HAcc"], &["VAcc"], &["VV"]],
+        Kind::Gpa => &[&["HAcc"], &["VAcc"], &["VV"], &["SAcc"]],
+        Kind::Ubx3 => &[&["hAcc"], &["vAcc"], &["sAcc"]],
         Kind::Imu => &[
             &["AccX"],
             &["AccY"],
@@ -769,6 +780,9 @@ struct Out {
     pending_gps: Option<(Sample, u64)>,
     /// Time of the last GPS row, for its GPA companion.
     last_gps_t: Option<f64>,
+    /// The last `UBX3` (t s, hAcc m, vAcc m, sAcc m/s): 2014-era logs write
+    /// the u-blox accuracies just before the `GPS` message of the same time.
+    ubx3: Option<(f64, [f64; 3])>,
     /// Boot time of the last mapped message, for GPS without a boot clock.
     last_boot_t: Option<f64>,
     /// Messages by name, in name order (as a `BTreeMap` iterates them):
@@ -942,9 +956,13 @@ impl Out {
             s.ve = spd * libm::sin(crs);
             s.vd = l.num(msg, GPS_VZ);
             let hdop = l.num(msg, GPS_HDOP);
-            if hdop > 0.0 {
-                s.eph = hdop; // HDop x 1 m user range error, see module doc
-                self.eph_hdop += 1;
+            match self.ubx3.take().filter(|(tu, _)| (tu - t).abs() <= GPA_MATCH_S) {
+                Some((_, acc)) => self.accuracies(&mut s, acc),
+                None if hdop > 0.0 => {
+                    s.eph = hdop; // HDop x 1 m user range error, see module doc
+                    self.eph_hdop += 1;
+                }
+                None => {}
             }
             let (week, ms) = (l.num(msg, GPS_WEEK), l.num(msg, GPS_MS));
             if week > 0.0 && ms >= 0.0 && (status.is_nan() || status >= 3.0) {
@@ -972,13 +990,24 @@ impl Out {
             return;
         }
         // Gone only if more than a reorder buffer of rows came in between.
-        let Some((s, _)) = self.pending_gps.as_mut() else {
+        let Some(mut row) = self.pending_gps.map(|(s, _)| s) else {
             return;
         };
-        if s.fix < 2.0 {
+        if row.fix < 2.0 {
             return;
         }
-        let (hacc, vacc) = (l.num(msg, GPA_HACC), l.num(msg, GPA_VACC));
+        self.accuracies(&mut row, [l.num(msg, GPA_HACC), l.num(msg, GPA_VACC), l.num(msg, GPA_SACC)]);
+        if l.num(msg, GPA_VV) == 0.0 {
+            row.vd = f64::NAN; // receiver has no vertical velocity; VZ is a filler 0
+        }
+        if let Some((s, _)) = self.pending_gps.as_mut() {
+            *s = row;
+        }
+    }
+
+    /// The receiver's accuracy claims `[hAcc m, vAcc m, sAcc m/s]` (a
+    /// non-positive or missing one is not a claim) onto a fix's row.
+    fn accuracies(&mut self, s: &mut Sample, [hacc, vacc, sacc]: [f64; 3]) {
         if hacc > 0.0 {
             s.eph = hacc;
             self.eph_hacc += 1;
@@ -986,9 +1015,15 @@ impl Out {
         if vacc > 0.0 {
             s.epv = vacc;
         }
-        if l.num(msg, GPA_VV) == 0.0 {
-            s.vd = f64::NAN; // receiver has no vertical velocity; VZ is a filler 0
+        if sacc > 0.0 {
+            s.sacc = sacc;
         }
+    }
+
+    /// A `UBX3` record: held for the `GPS` message of the same time.
+    fn on_ubx3(&mut self, l: &Layout, msg: &[u8]) {
+        let Some(t) = self.time(l, msg) else { return };
+        self.ubx3 = Some((t, [l.num(msg, UBX3_HACC), l.num(msg, UBX3_VACC), l.num(msg, UBX3_SACC)]));
     }
 
     fn on_imu(&mut self, l: &Layout, msg: &[u8], sink: &mut dyn RowSink) {
@@ -1421,8 +1456,8 @@ mod tests {
         assert!(x.messages.windows(2).all(|w| w[0].t <= w[1].t));
     }
 
-    /// The plane log's MODE numbers are plane modes; the newer truncated
-    /// plane log has GPA, so its eph is metres.
+    /// The plane log's MODE numbers are plane modes; its u-blox `UBX3`
+    /// records and the newer truncated plane log's GPA give eph in metres.
     #[test]
     fn plane_modes_and_gpa_eph() {
         use crate::extras::EphSource;
@@ -1430,10 +1465,40 @@ mod tests {
         let d = read_dataflash(&b).unwrap();
         let names: Vec<&str> = d.extras.modes.iter().map(|m| m.mode.as_str()).collect();
         assert_eq!(names, ["MANUAL", "CIRCLE", "MANUAL", "FBWA", "RTL", "MANUAL", "FBWA", "FBWB", "FBWA"]);
-        assert_eq!(d.extras.eph_source, EphSource::Hdop);
+        assert_eq!(d.extras.eph_source, EphSource::Eph);
         let t = read_dataflash(PLANE).unwrap();
         assert_eq!(t.extras.eph_source, EphSource::Eph);
         assert_eq!(t.extras.modes.iter().map(|m| m.mode.as_str()).collect::<Vec<_>>(), ["MANUAL"]);
+    }
+
+    /// 2014-era logs write the u-blox accuracies (`UBX3`: hAcc, vAcc m,
+    /// sAcc m/s) just before the `GPS` message of the same boot time; they
+    /// become the fix's `eph`, `epv` and `sacc` (values from pymavlink). A
+    /// fix without one keeps HDop as its eph (Loiter_RTL, `EphSource::Hdop`).
+    #[test]
+    fn ubx3_accuracies_go_onto_their_fix() {
+        use crate::extras::EphSource;
+        let cases = [
+            ("erle_copter_26-11-2014_181.BIN", [(35.299, [1.315000057220459, 2.0820000171661377, 0.23999999463558197]), (35.379, [1.311000108718872, 2.076000213623047, 0.28999999165534973])]),
+            ("erle_plane_4-12-2014_329.BIN", [(16.738, [3.434000253677368, 4.314000129699707, 0.6200000047683716]), (16.938, [3.3990001678466797, 4.265000343322754, 0.5199999809265137])]),
+        ];
+        for (name, fixes) in cases {
+            let b = std::fs::read(format!("{}/../../shared/data/ardupilot/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+            let d = read_dataflash(&b).unwrap();
+            assert_eq!(d.extras.eph_source, EphSource::Eph, "{name}");
+            let mut gps = d.samples.iter().filter(|s| s.has_position());
+            for (t, [h, v, sa]) in fixes {
+                let s = gps.next().unwrap();
+                assert_close!(s.t, t, 1e-9);
+                assert_eq!([s.eph, s.epv, s.sacc], [h, v, sa], "{name} at {t} s");
+            }
+            // Every fix has its record: the receiver writes one per solution.
+            assert!(d.samples.iter().filter(|s| s.has_position()).all(|s| s.sacc > 0.0), "{name}");
+        }
+        let b = std::fs::read(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shared/data/ardupilot/Loiter_RTL.bin")).unwrap();
+        let d = read_dataflash(&b).unwrap();
+        assert_eq!(d.extras.eph_source, EphSource::Hdop);
+        assert!(d.samples.iter().all(|s| s.sacc.is_nan()));
     }
 
     // ---- Euler -> quaternion -------------------------------------------
@@ -2131,9 +2196,10 @@ mod tests {
         assert_close!(g.vd, -0.5, 0.0);
         assert_close!(g.eph, 1.5, 1e-12); // GPA HAcc wins over HDop
         assert_close!(g.epv, 2.3, 1e-12);
+        assert_close!(g.sacc, 0.4, 1e-12); // GPA SAcc, m/s
         assert_close!(g.sats, 12.0, 0.0);
         assert_close!(nf.fix, 1.0, 0.0);
-        assert!(nf.reports_no_fix() && !nf.has_position() && !nf.has_velocity() && nf.eph.is_nan());
+        assert!(nf.reports_no_fix() && !nf.has_position() && !nf.has_velocity() && nf.eph.is_nan() && nf.sacc.is_nan());
         assert_eq!(count(&d, "ATT"), 1);
         assert_eq!(count(&d, "IMU"), 3);
         assert_eq!(count(&d, "GPS"), 3);

@@ -68,6 +68,11 @@ pub struct Sample {
     /// time of week, UTC seconds): only its rate against `t` is used, to
     /// measure how fast the log's boot clock runs (see `detector::ClockRate`).
     pub gps_time: f64,
+    /// The receiver's speed accuracy claim, m/s (u-blox `sAcc`, ArduPilot
+    /// `GPA.SAcc`/`UBX3.sAcc`, PX4 `s_variance_m_s`): only its ratio to the
+    /// receiver's usual claim is used, to scale the velocity test (see
+    /// `detector::ReceiverQuality`).
+    pub sacc: f64,
 }
 
 impl Default for Sample {
@@ -78,11 +83,11 @@ impl Default for Sample {
 }
 
 /// Column names in contract order; `Sample::get`/`set` index into this.
-/// `gps_time` is an extension of the contract's columns (an unknown column
-/// to a reader that predates it), so it comes last.
-pub const COLUMNS: [&str; 27] = [
+/// `gps_time` and `sacc` extend the contract's columns (unknown columns to
+/// a reader that predates them), so they come last.
+pub const COLUMNS: [&str; 28] = [
     "t", "lat", "lon", "alt", "pn", "pe", "pd", "vn", "ve", "vd", "fix", "sats", "eph", "epv",
-    "ax", "ay", "az", "gx", "gy", "gz", "qw", "qx", "qy", "qz", "baro", "label", "gps_time",
+    "ax", "ay", "az", "gx", "gy", "gz", "qw", "qx", "qy", "qz", "baro", "label", "gps_time", "sacc",
 ];
 
 impl Sample {
@@ -93,7 +98,7 @@ impl Sample {
         Sample {
             t, lat: n, lon: n, alt: n, pn: n, pe: n, pd: n, vn: n, ve: n, vd: n, fix: n,
             sats: n, eph: n, epv: n, ax: n, ay: n, az: n, gx: n, gy: n, gz: n, qw: n, qx: n,
-            qy: n, qz: n, baro: n, label: n, gps_time: n,
+            qy: n, qz: n, baro: n, label: n, gps_time: n, sacc: n,
         }
     }
 
@@ -106,7 +111,7 @@ impl Sample {
             10 => self.fix, 11 => self.sats, 12 => self.eph, 13 => self.epv, 14 => self.ax,
             15 => self.ay, 16 => self.az, 17 => self.gx, 18 => self.gy, 19 => self.gz,
             20 => self.qw, 21 => self.qx, 22 => self.qy, 23 => self.qz, 24 => self.baro,
-            25 => self.label, 26 => self.gps_time, _ => f64::NAN,
+            25 => self.label, 26 => self.gps_time, 27 => self.sacc, _ => f64::NAN,
         }
     }
 
@@ -143,6 +148,7 @@ impl Sample {
             baro: g(24),
             label: g(25),
             gps_time: g(26),
+            sacc: g(27),
         }
     }
 
@@ -156,7 +162,7 @@ impl Sample {
             12 => &mut self.eph, 13 => &mut self.epv, 14 => &mut self.ax, 15 => &mut self.ay,
             16 => &mut self.az, 17 => &mut self.gx, 18 => &mut self.gy, 19 => &mut self.gz,
             20 => &mut self.qw, 21 => &mut self.qx, 22 => &mut self.qy, 23 => &mut self.qz,
-            24 => &mut self.baro, 25 => &mut self.label, 26 => &mut self.gps_time,
+            24 => &mut self.baro, 25 => &mut self.label, 26 => &mut self.gps_time, 27 => &mut self.sacc,
             _ => return,
         };
         *slot = v;
@@ -234,6 +240,7 @@ pub const fn range_of(i: usize) -> (f64, f64) {
         20..=23 => (-2.0, 2.0),       // quaternion
         24 => (-2000.0, 1e5),         // baro, m
         26 => (-1e12, 1e12),          // gps_time, s
+        27 => (0.0, 1e12),            // sacc, m/s
         _ => (f64::NEG_INFINITY, f64::INFINITY),
     }
 }
@@ -303,6 +310,7 @@ mod tests {
         }
         assert!(r.get(COLUMNS.len()).is_nan());
         assert_eq!(Sample::column_index("gps_time"), Some(26));
+        assert_eq!(Sample::column_index("sacc"), Some(27));
     }
 
     #[test]

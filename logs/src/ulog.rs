@@ -43,7 +43,7 @@
 //!   IMU rows that is the gyro sample; the accel sample is
 //!   `accelerometer_timestamp_relative` µs away (a few ms) and is not shifted,
 //!   only dropped when that offset is `RELATIVE_TIMESTAMP_INVALID`.
-//! - A GPS row with fix_type < 2 keeps fix/sats/eph/epv but leaves position
+//! - A GPS row with fix_type < 2 keeps fix/sats/eph/epv/sacc but leaves position
 //!   and velocity NaN ("no fix at this instant").
 //! - Only `multi_id` 0 instances are mapped; all instances are counted in
 //!   `topic_counts` ("topic", "topic/N"), which match pyulog's counts.
@@ -706,6 +706,9 @@ struct GpsMap {
     vel: [Option<Loc>; 3],
     eph: Option<Loc>,
     epv: Option<Loc>,
+    /// `s_variance_m_s`: despite its name, the receiver's speed accuracy
+    /// (m/s, u-blox sAcc).
+    sacc: Option<Loc>,
     sats: Option<Loc>,
     fix: Option<Loc>,
     /// `time_utc_usec`: UTC of the fix, µs since 1970 (0 when unknown).
@@ -729,6 +732,7 @@ impl GpsMap {
             ],
             eph: l.loc1("eph"),
             epv: l.loc1("epv"),
+            sacc: l.loc1("s_variance_m_s"),
             sats: l.loc1("satellites_used"),
             fix: l.loc1("fix_type"),
             utc: l.loc1("time_utc_usec"),
@@ -744,6 +748,7 @@ impl GpsMap {
         s.sats = val(self.sats, d);
         s.eph = val(self.eph, d);
         s.epv = val(self.epv, d);
+        s.sacc = val(self.sacc, d);
         if !s.reports_no_fix() {
             s.lat = val(self.lat, d);
             s.lon = val(self.lon, d);
@@ -1776,8 +1781,10 @@ mod tests {
         let rate = (fixes.len() - 1) as f64 / span;
         assert!(close(rate, 19.23, 0.05), "rate {rate}");
         // pyulog: first fix (index 146) at 1710773358798000 us,
-        // lat 47.3977420, lon 8.5455938 deg, alt 488.014 m, 10 sats, eph 3.96 m.
+        // lat 47.3977420, lon 8.5455938 deg, alt 488.014 m, 10 sats, eph 3.96 m,
+        // s_variance_m_s 0.25 m/s (the speed accuracy; 0.25 on every record).
         let f = fixes[0];
+        assert!(gps.iter().all(|s| s.sacc == 0.25));
         assert!(close(f.t, 1_710_773_358.798, 1e-6));
         assert!(close(f.lat, 47.3977420, 1e-7) && close(f.lon, 8.5455938, 1e-7));
         assert!(close(f.alt, 488.014, 1e-3));

@@ -20,7 +20,7 @@ thread_local! {
 /// chunks of [`CHUNK_ROWS`], so wasm memory does not grow with it; the limit
 /// bounds the result arrays (26 bytes a row, allocated in JS).
 pub const MAX_BATCH_ROWS: usize = 1 << 24;
-/// Rows per chunk of a `pushColumns` batch: 27 columns × 8 B × 4096 = 885 KB
+/// Rows per chunk of a `pushColumns` batch: 28 columns × 8 B × 4096 = 918 KB
 /// of scratch, reused.
 const CHUNK_ROWS: usize = 4096;
 
@@ -77,6 +77,8 @@ export interface NavSample {
   label?: number;
   /** The receiver's own time of the fix, s, on any epoch (GPS seconds, UTC seconds): the boot clock's rate is measured against it. */
   gps_time?: number;
+  /** The receiver's speed accuracy claim, m/s (u-blox sAcc): the velocity test is scaled by its ratio to the receiver's usual claim. */
+  sacc?: number;
 }
 /** Columnar batch: every array the same length, NaN = absent. */
 export type NavColumns = { t: Float64Array } & Partial<Record<Exclude<keyof NavSample, "t">, Float64Array>>;
@@ -127,13 +129,13 @@ pub struct Detector {
     rows: Vec<Sample>,
     /// Reused input buffer for `pushRow` / `pushRowInto`.
     row: Vec<f64>,
-    /// The package's `push` fast path: 27 inputs then 7 outputs, written and
+    /// The package's `push` fast path: 28 inputs then 7 outputs, written and
     /// read by JS through a view on wasm memory (boxed: its address is fixed
     /// for the detector's life), so a row costs one call with no arguments.
     io: Box<[f64; IO_LEN]>,
 }
 
-/// `Detector::io`: the row's 27 columns, then `[t, status, f, r, c, kind, gpsEpoch]`.
+/// `Detector::io`: the row's 28 columns, then `[t, status, f, r, c, kind, gpsEpoch]`.
 const IO_LEN: usize = COLUMNS.len() + 7;
 
 #[wasm_bindgen]
@@ -176,7 +178,7 @@ impl Detector {
         output_object(&out)
     }
 
-    /// The 27 columns (contract §1 and `gps_time`) of one row from `row` (Float64Array or array).
+    /// The 28 columns (contract §1, `gps_time` and `sacc`) of one row from `row` (Float64Array or array).
     fn read_row(&mut self, row: &JsValue, what: &str) -> Result<Sample, JsError> {
         js_in::f64s(row, COLUMNS.len(), what, &mut self.row).map_err(err)?;
         if self.row.len() != COLUMNS.len() {
@@ -185,7 +187,7 @@ impl Detector {
         Ok(row_from_values(&self.row))
     }
 
-    /// Push one row given as the 27 columns in `COLUMNS` order
+    /// Push one row given as the 28 columns in `COLUMNS` order
     /// (NaN = absent), a Float64Array or an array of numbers.
     #[wasm_bindgen(js_name = pushRow, unchecked_return_type = "PushResult")]
     pub fn push_row(&mut self, #[wasm_bindgen(unchecked_param_type = "Float64Array | number[]")] row: &JsValue) -> Result<JsValue, JsError> {
