@@ -50,12 +50,15 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // (the offset kept on an unflagged fault's end, the origin measured on the
 // level before the jump, with the jump-size scale) 920 B: 303,015 B, and
 // its vertical drag-off end (a second `DragEnd`, not a generic copy, which
-// cost 1,956 B) about 660 B more. The budget
+// cost 1,956 B) about 660 B more: 303,721 B. Session 13's receiver speed
+// claim (a 28th column, the DataFlash `UBX3` record, the usual claim's
+// state and codec, the scaled velocity tests with their window maxima)
+// adds 2,240 B: 305,961 B. The budget
 // guards today's size plus 0.5 KB: a
 // change that crosses it must find the bytes elsewhere, or raise it with
 // the reason, never past the goal, which the last test asserts.
 const FIRST_USE_GOAL = 307_200;
-const CORE_WASM_BUDGET = 304_200;
+const CORE_WASM_BUDGET = 306_500;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;
