@@ -28,11 +28,28 @@ use crate::thresholds::{AdaptiveConfig, Evaluator, Method as ThMethod, SpeedBand
 /// dropped from D2: they carry no fault signature and would only teach the
 /// model to alarm on clean data.
 pub fn train_model(streams: &[&[Sample]], cfg: &Config, seed: u64) -> Result<Model, String> {
-    let mut normal = vec![];
-    let mut fault = vec![];
-    let base = Model::untrained();
+    let mut ex = Examples::default();
     for rows in streams {
-        let mut det = Detector::with_model(cfg.clone(), &base);
+        ex.add(rows, cfg)?;
+    }
+    ex.fit(cfg, seed)
+}
+
+/// The `(R, C)` examples of [`train_model`], gathered stream by stream, so
+/// a battery of hundreds of flights need not be held in memory at once.
+#[derive(Default)]
+pub struct Examples {
+    normal: Vec<[f64; 2]>,
+    fault: Vec<[f64; 2]>,
+    streams: usize,
+}
+
+impl Examples {
+    /// Run one labelled stream with decisions forced to its labels and
+    /// keep its labelled GPS epochs' inputs (fault epochs only with a fault
+    /// signature, see [`train_model`]).
+    pub fn add(&mut self, rows: &[Sample], cfg: &Config) -> Result<(), String> {
+        let mut det = Detector::with_model(cfg.clone(), &Model::untrained());
         det.set_oracle(true);
         for (i, s) in rows.iter().enumerate() {
             let o = det.push(s).map_err(|e| format!("training stream, {e} (index {i})"))?;
@@ -42,59 +59,66 @@ pub fn train_model(streams: &[&[Sample]], cfg: &Config, seed: u64) -> Result<Mod
             let x = inputs(o.r, o.c);
             if s.label >= 0.5 {
                 if has_signature(o.r, o.c) {
-                    fault.push(x);
+                    self.fault.push(x);
                 }
             } else {
-                normal.push(x);
+                self.normal.push(x);
             }
         }
+        self.streams += 1;
+        Ok(())
     }
-    if normal.len() < 10 || fault.len() < 10 {
-        return Err(format!(
-            "training needs at least 10 labelled normal and 10 fault GPS epochs with a fault signature; got {} and {}",
-            normal.len(),
-            fault.len()
-        ));
-    }
-    let mut rng = Rng::new(seed);
-    let pick = |v: &mut Vec<[f64; 2]>, n: usize, rng: &mut Rng| -> Vec<[f64; 2]> {
-        // Partial Fisher–Yates: a seeded uniform subsample.
-        let n = n.min(v.len());
-        for i in 0..n {
-            let j = i + (rng.next_u64() % (v.len() - i) as u64) as usize;
-            v.swap(i, j);
+
+    /// Subsample `q` per class with a seeded RNG and fit the ANFIS.
+    pub fn fit(self, cfg: &Config, seed: u64) -> Result<Model, String> {
+        let Examples { mut normal, mut fault, streams } = self;
+        if normal.len() < 10 || fault.len() < 10 {
+            return Err(format!(
+                "training needs at least 10 labelled normal and 10 fault GPS epochs with a fault signature; got {} and {}",
+                normal.len(),
+                fault.len()
+            ));
         }
-        v[..n].to_vec()
-    };
-    let d1 = pick(&mut normal, cfg.q, &mut rng);
-    let d2 = pick(&mut fault, cfg.q, &mut rng);
-    let mut xs = d1.clone();
-    xs.extend_from_slice(&d2);
-    let ys: Vec<f64> = d1.iter().map(|_| 0.0).chain(d2.iter().map(|_| 1.0)).collect();
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for x in &xs {
-        for k in 0..2 {
-            lo[k] = lo[k].min(x[k]);
-            hi[k] = hi[k].max(x[k]);
+        let mut rng = Rng::new(seed);
+        let pick = |v: &mut Vec<[f64; 2]>, n: usize, rng: &mut Rng| -> Vec<[f64; 2]> {
+            // Partial Fisher–Yates: a seeded uniform subsample.
+            let n = n.min(v.len());
+            for i in 0..n {
+                let j = i + (rng.next_u64() % (v.len() - i) as u64) as usize;
+                v.swap(i, j);
+            }
+            v[..n].to_vec()
+        };
+        let d1 = pick(&mut normal, cfg.q, &mut rng);
+        let d2 = pick(&mut fault, cfg.q, &mut rng);
+        let mut xs = d1.clone();
+        xs.extend_from_slice(&d2);
+        let ys: Vec<f64> = d1.iter().map(|_| 0.0).chain(d2.iter().map(|_| 1.0)).collect();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for x in &xs {
+            for k in 0..2 {
+                lo[k] = lo[k].min(x[k]);
+                hi[k] = hi[k].max(x[k]);
+            }
         }
+        let mut anfis = Anfis::init_grid(lo, hi);
+        let mse = anfis.train_hybrid(&xs, &ys, 200, 0.05);
+        Ok(Model {
+            anfis,
+            d1,
+            d2,
+            provenance: format!(
+                "navguard-train: {} streams, {} normal / {} fault epochs before subsampling, q={}, window={}, seed={}, training MSE {:.4}",
+                streams,
+                normal.len(),
+                fault.len(),
+                cfg.q,
+                cfg.window,
+                seed,
+                mse
+            ),
+        })
     }
-    let mut anfis = Anfis::init_grid(lo, hi);
-    let mse = anfis.train_hybrid(&xs, &ys, 200, 0.05);
-    Ok(Model {
-        anfis,
-        d1,
-        d2,
-        provenance: format!(
-            "navguard-train: {} streams, {} normal / {} fault epochs before subsampling, q={}, window={}, seed={}, training MSE {:.4}",
-            streams.len(),
-            normal.len(),
-            fault.len(),
-            cfg.q,
-            cfg.window,
-            seed,
-            mse
-        ),
-    })
 }
 
 
@@ -170,6 +194,36 @@ mod tests {
         let q = calibrate_mahalanobis(1000..1004).unwrap();
         println!("calibrated d² threshold {q:.2} (shipped {MAHA_D2})");
         assert!((q - MAHA_D2).abs() <= 0.05 * MAHA_D2, "recalibrated {q:.2}, shipped {MAHA_D2}");
+    }
+
+    /// `navguard-train --battery N` gathers its examples flight by flight
+    /// (`Examples`): the same model as `train_model` over the same streams,
+    /// and the same bytes on a second run. A clean flight alone has no
+    /// fault example, and the error says how many of each it found.
+    #[test]
+    fn battery_examples_train_the_same_model_as_the_streams_at_once() {
+        use crate::battery::{simulate, Flight, Split};
+        let cfg = Config::default();
+        // Tune #11: a 16 m vertical step for 76 s; #17: a 16 m horizontal
+        // step for 68 s and a baro drift; #4: clean.
+        let rows: Vec<Vec<Sample>> = [11, 17, 4].iter().map(|&i| simulate(&Flight::draw(Split::Tune, i))).collect();
+        let refs: Vec<&[Sample]> = rows.iter().map(|r| r.as_slice()).collect();
+        let at_once = train_model(&refs, &cfg, 42).unwrap();
+        let json = |m: &Model| serde_json::to_string(m).unwrap();
+        for _ in 0..2 {
+            let mut ex = Examples::default();
+            for r in &rows {
+                ex.add(r, &cfg).unwrap();
+            }
+            assert_eq!(json(&ex.fit(&cfg, 42).unwrap()), json(&at_once));
+        }
+        assert!(at_once.provenance.starts_with("navguard-train: 3 streams, "), "{}", at_once.provenance);
+        let mut clean = Examples::default();
+        clean.add(&rows[2], &cfg).unwrap();
+        let (n, f) = (clean.normal.len(), clean.fault.len());
+        assert!(n > 1000 && f == 0, "{n} normal, {f} fault examples on a clean flight");
+        let e = clean.fit(&cfg, 42).unwrap_err();
+        assert!(e.contains(&format!("got {n} and 0")), "{e}");
     }
 
     /// The shipped pools are exactly what the simulator gives, byte for

@@ -6,6 +6,9 @@
 //! what the JSON parses to, see `navguard::model::EMBEDDED_MODEL`).
 //! `cargo run --release --bin navguard-train -- --from FILE.csv [--out model.json]`
 //! trains from your own labelled navlog CSV(s) (`label` column, 0/1).
+//! `cargo run --release --bin navguard-train -- --battery N [--out model.json]`
+//! trains from the randomised battery's tune flights 0..N (`navguard::battery`;
+//! never its evaluation split), one flight in memory at a time.
 
 use navguard::config::Config;
 use navguard::logs::csv::read_csv;
@@ -52,6 +55,7 @@ fn battery() -> Vec<Scenario> {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut from = vec![];
+    let mut battery_flights: Option<u64> = None;
     let mut out = String::from("detector/src/default_model.json");
     let mut i = 0;
     while i < args.len() {
@@ -60,12 +64,20 @@ fn main() {
                 i += 1;
                 from.push(args.get(i).cloned().unwrap_or_default());
             }
+            "--battery" => {
+                i += 1;
+                battery_flights = args.get(i).and_then(|n| n.parse().ok());
+                if battery_flights.is_none() {
+                    eprintln!("navguard-train: --battery needs a number of tune flights");
+                    std::process::exit(2);
+                }
+            }
             "--out" => {
                 i += 1;
                 out = args.get(i).cloned().unwrap_or(out);
             }
             "-h" | "--help" => {
-                println!("usage: navguard-train [--from LABELLED.csv ...] [--out model.json]");
+                println!("usage: navguard-train [--from LABELLED.csv ... | --battery N] [--out model.json]");
                 return;
             }
             other => {
@@ -76,6 +88,25 @@ fn main() {
         i += 1;
     }
     let cfg = Config::default();
+    if let Some(n) = battery_flights {
+        let mut ex = navguard::calibrate::Examples::default();
+        for i in 0..n {
+            let f = navguard::battery::Flight::draw(navguard::battery::Split::Tune, i);
+            if let Err(e) = ex.add(&navguard::battery::simulate(&f), &cfg) {
+                eprintln!("navguard-train: tune #{i}: {e}");
+                std::process::exit(2);
+            }
+            if (i + 1) % 40 == 0 {
+                eprintln!("navguard-train: {} of {n} tune flights", i + 1);
+            }
+        }
+        let model = ex.fit(&cfg, 42).unwrap_or_else(|e| {
+            eprintln!("navguard-train: {e}");
+            std::process::exit(2)
+        });
+        write_model(&model, &out, true);
+        return;
+    }
     let streams: Vec<Vec<Sample>> = if from.is_empty() {
         battery()
             .iter()
@@ -123,14 +154,20 @@ fn main() {
         eprintln!("navguard-train: {e}");
         std::process::exit(2)
     });
-    let json = serde_json::to_string(&model).unwrap_or_default();
+    write_model(&model, &out, from.is_empty());
+}
+
+/// Write the model's JSON to `out`, and beside it (`.json` → `.bin`) the
+/// binary form the crate embeds when `embedded`.
+fn write_model(model: &navguard::model::Model, out: &str, embedded: bool) {
+    let json = serde_json::to_string(model).unwrap_or_default();
     let json = json + "\n";
-    if let Err(e) = std::fs::write(&out, &json) {
+    if let Err(e) = std::fs::write(out, &json) {
         eprintln!("navguard-train: cannot write {out}: {e}");
         std::process::exit(2);
     }
     // The embedded binary is made from the JSON text, as its test checks.
-    if let Some(stem) = out.strip_suffix(".json").filter(|_| from.is_empty()) {
+    if let Some(stem) = out.strip_suffix(".json").filter(|_| embedded) {
         let bin = format!("{stem}.bin");
         let written = navguard::model::binary_of_json(&json).and_then(|b| std::fs::write(&bin, b).map_err(|e| e.to_string()));
         if let Err(e) = written {
