@@ -3,7 +3,10 @@
 //!
 //! `cargo run --release -p navguard-examples --example battery -- [--split eval|tune] [--flights N]
 //!  [--start I] [--method M] [--config CFG.json] [--checks N] [--imu-flights N]
-//!  [--threads T] [--json] [--verbose] [--write DIR]`
+//!  [--threads T] [--json] [--verbose] [--write DIR] [--sacc]`
+//!
+//! `--sacc`: the same flights with receivers that report their speed
+//! accuracy (`Flight::with_speed_claims`).
 //!
 //! Defaults: eval split, 240 flights, the default detector, 6 instances per
 //! specific check, 6 flights for IMU-rate invariance, 2 threads.
@@ -24,10 +27,11 @@ struct Args {
     json: bool,
     verbose: bool,
     write: Option<String>,
+    sacc: bool,
 }
 
 fn parse() -> Result<Args, String> {
-    let mut a = Args { split: Split::Eval, flights: 240, start: 0, cfg: Config::default(), checks: 6, imu_flights: 6, threads: 2, json: false, verbose: false, write: None };
+    let mut a = Args { split: Split::Eval, flights: 240, start: 0, cfg: Config::default(), checks: 6, imu_flights: 6, threads: 2, json: false, verbose: false, write: None, sacc: false };
     let mut it = std::env::args().skip(1);
     let num = |v: Option<String>, name: &str| -> Result<u64, String> { v.ok_or(format!("{name}: missing value"))?.parse().map_err(|e| format!("{name}: {e}")) };
     let mut method: Option<String> = None;
@@ -48,6 +52,7 @@ fn parse() -> Result<Args, String> {
             "--json" => a.json = true,
             "--verbose" => a.verbose = true,
             "--write" => a.write = it.next(),
+            "--sacc" => a.sacc = true,
             other => return Err(format!("unknown argument {other}")),
         }
     }
@@ -108,7 +113,7 @@ const HEAD: &str = "| | flights | GPS epochs | accuracy | false alarm | misdetec
 fn main() -> Result<(), String> {
     let a = parse()?;
     let t0 = std::time::Instant::now();
-    let flights: Vec<Flight> = (a.start..a.start + a.flights).map(|i| Flight::draw(a.split, i)).collect();
+    let flights: Vec<Flight> = (a.start..a.start + a.flights).map(|i| Flight::draw(a.split, i)).map(|f| if a.sacc { f.with_speed_claims() } else { f }).collect();
     if let Some(dir) = &a.write {
         std::fs::create_dir_all(dir).map_err(|e| format!("{dir}: {e}"))?;
         for f in &flights {

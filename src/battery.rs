@@ -330,6 +330,11 @@ pub struct GpsDraw {
     pub gaps: Vec<[f64; 2]>,
     /// Phase of the first epoch, s.
     pub phase: f64,
+    /// The receiver reports its speed accuracy (`sacc` = `eph_scale` ×
+    /// `vel_sigma_h` × the satellite factor; five times that while
+    /// degraded, the onset's while frozen). Off in the drawn battery, whose
+    /// figures the README tracks; `Flight::with_speed_claims` turns it on.
+    pub reports_sacc: bool,
 }
 
 /// IMU draws.
@@ -563,6 +568,14 @@ impl Flight {
         f
     }
 
+    /// The same flight with a receiver that reports its speed accuracy
+    /// (`GpsDraw::reports_sacc`); every other row is the same.
+    pub fn with_speed_claims(&self) -> Flight {
+        let mut f = self.clone();
+        f.gps.reports_sacc = true;
+        f
+    }
+
     /// Add a fault over true time `[start, start + length)`, s.
     pub fn add_fault(&mut self, kind: FaultKind, axis: Axis, magnitude: f64, direction: f64, start: f64, length: f64) {
         let end = (start + length).min(self.path.duration);
@@ -603,7 +616,7 @@ impl Flight {
             .map(|f| format!("{} {:?} {:.2} at {:.1}-{:.1} s", f.kind.name(), f.axis, f.magnitude, f.start, f.end))
             .collect();
         format!(
-            "{} #{} seed {}: {} {:.0} s, GPS {} Hz {:?} σ {:.2} m, IMU {} Hz {:?} vib {:.1}, clock {:.3}; faults: {}",
+            "{} #{} seed {}: {} {:.0} s, GPS {} Hz {:?} σ {:.2} m{}, IMU {} Hz {:?} vib {:.1}, clock {:.3}; faults: {}",
             self.split.name(),
             self.index,
             self.seed,
@@ -612,6 +625,7 @@ impl Flight {
             self.gps.rate,
             self.gps.family,
             self.gps.sigma_h,
+            if self.gps.reports_sacc { " with sAcc" } else { "" },
             self.imu.rate,
             self.imu.grade,
             self.imu.vibration,
@@ -666,6 +680,7 @@ fn draw_gps(split: Split, duration: f64, rng: &mut Rng) -> GpsDraw {
         drop_prob,
         gaps,
         phase: rng.range(0.0, 1.0 / rate),
+        reports_sacc: false,
     }
 }
 
@@ -1274,6 +1289,7 @@ fn gps_rows(f: &Flight, path: &Path) -> Vec<Sample> {
         let sat_factor = libm::sqrt(d.sats / sats);
         let mut eph = d.eph_scale * d.sigma_h * sat_factor;
         let mut epv = d.eph_scale * d.sigma_v * sat_factor;
+        let mut sacc = d.eph_scale * d.vel_sigma_h * sat_factor;
         let mut nsat = sats;
         let mut fix = 3.0;
         let mut any_degraded = false;
@@ -1299,6 +1315,7 @@ fn gps_rows(f: &Flight, path: &Path) -> Vec<Sample> {
                     if let Some((p0, v0, e0, n0)) = fz {
                         pm = p0;
                         vm = v0;
+                        sacc *= e0 / eph;
                         eph = e0;
                         epv = e0 * d.sigma_v / d.sigma_h;
                         nsat = n0;
@@ -1312,6 +1329,7 @@ fn gps_rows(f: &Flight, path: &Path) -> Vec<Sample> {
                     pm = truth_p + off + walk + err * 2.0;
                     vm = truth_v + vnoise * 5.0 + Vector3::new(0.3 * libm::cos(ft.direction), 0.3 * libm::sin(ft.direction), 0.0);
                     nsat = 4.0 + libm::floor(2.0 * u_sats);
+                    sacc *= 5.0 * (5.0 + 5.0 * u_sats) / eph;
                     eph = 5.0 + 5.0 * u_sats;
                     epv = 1.6 * eph;
                     fix = if u_sats < 0.3 { 2.0 } else { 3.0 };
@@ -1340,6 +1358,9 @@ fn gps_rows(f: &Flight, path: &Path) -> Vec<Sample> {
             s.sats = nsat;
             s.eph = eph;
             s.epv = epv;
+            if d.reports_sacc {
+                s.sacc = sacc;
+            }
         } else {
             s.sats = libm::floor(4.0 * u_sats);
         }

@@ -2519,7 +2519,12 @@ impl Detector {
             self.start_filter(&fix);
             return Output { t: fix.t, status: 0, f: 0.0, r: 0.0, c: 0.0, kind: kind::NORMAL, gps_epoch: true, driver: 255 };
         };
-        let speed_claim = self.quality.speed_scale(fix.sacc);
+        // Not on a fix the receiver declares degraded: the detector reports
+        // those by the receiver's word, and the velocity tests' verdicts
+        // on them are what ends such a stretch (battery tune #680 with
+        // speed claims: a 81 s degraded fix whose sAcc rose fivefold; with
+        // its velocity tests scaled, 293 false-positive epochs followed).
+        let speed_claim = if declared { 1.0 } else { self.quality.speed_scale(fix.sacc) };
         self.ind.set_speed_claim(speed_claim);
         let res = self.last_est.residuals(kf, &mut self.ind, &fix);
         res.write(&mut self.resid);
