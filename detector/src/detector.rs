@@ -1693,10 +1693,10 @@ impl Withheld {
     }
 
     /// The filter update stage: feed the fix's groups that are not
-    /// withheld, position σ scaled by `k` and velocity σ by `k_vel` (see
-    /// `ReceiverQuality`); the indicator engine learns each fed axis'
-    /// posterior residual. A failed update leaves the rest unfed.
-    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6], [k, k_vel]: [f64; 2]) -> Result<(), FilterError> {
+    /// withheld, with σ scaled by `k` (see `ReceiverQuality`); the
+    /// indicator engine learns each fed axis' posterior residual. A failed
+    /// update leaves the rest unfed.
+    fn feed(&self, kf: &mut Kf, ind: &mut IndicatorEngine, fix: &Fix, prev_r: &[f64; 6], k: f64) -> Result<(), FilterError> {
         if !self.gps_pos() {
             kf.update_position_scaled(&fix.y, k)?;
             let p = kf.position();
@@ -1708,7 +1708,7 @@ impl Withheld {
         }
         match (&fix.vel, self.gps_vel()) {
             (Some(v), false) => {
-                kf.update_velocity_scaled(v, k_vel)?;
+                kf.update_velocity_scaled(v, k)?;
                 let vel = kf.velocity();
                 for a in 0..3 {
                     ind.accept(3 + a, prev_r[3 + a], kf.velocity_var(a), v[a] - vel[a]);
@@ -2522,8 +2522,8 @@ impl Detector {
         // Not on a fix the receiver declares degraded: the detector reports
         // those by the receiver's word, and the velocity tests' verdicts
         // on them are what ends such a stretch (battery tune #680 with
-        // speed claims: a 81 s degraded fix whose sAcc rose fivefold; with
-        // its velocity tests scaled, 293 false-positive epochs followed).
+        // speed claims: an 81 s degraded fix whose sAcc rose fivefold; with
+        // its velocity tests scaled, 294 false-positive epochs followed).
         let speed_claim = if declared { 1.0 } else { self.quality.speed_scale(fix.sacc) };
         self.ind.set_speed_claim(speed_claim);
         let res = self.last_est.residuals(kf, &mut self.ind, &fix);
@@ -2620,8 +2620,7 @@ impl Detector {
             kf.reset_to(&fix.y, fix.vel.as_ref());
             Ok(())
         } else {
-            let k = self.quality.scale(fix.eph);
-            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r, [k, k])
+            self.episode.withheld.feed(kf, &mut self.ind, &fix, &res.prev_r, self.quality.scale(fix.eph))
         };
         if !step.fault {
             self.quality.learn(&fix);

@@ -956,13 +956,12 @@ impl Out {
             s.ve = spd * libm::sin(crs);
             s.vd = l.num(msg, GPS_VZ);
             let hdop = l.num(msg, GPS_HDOP);
-            match self.ubx3.take().filter(|(tu, _)| (tu - t).abs() <= GPA_MATCH_S) {
-                Some((_, acc)) => self.accuracies(&mut s, acc),
-                None if hdop > 0.0 => {
-                    s.eph = hdop; // HDop x 1 m user range error, see module doc
-                    self.eph_hdop += 1;
-                }
-                None => {}
+            if let Some((_, acc)) = self.ubx3.take().filter(|(tu, _)| (tu - t).abs() <= GPA_MATCH_S) {
+                self.accuracies(&mut s, acc);
+            }
+            if s.eph.is_nan() && hdop > 0.0 {
+                s.eph = hdop; // HDop x 1 m user range error, see module doc
+                self.eph_hdop += 1;
             }
             let (week, ms) = (l.num(msg, GPS_WEEK), l.num(msg, GPS_MS));
             if week > 0.0 && ms >= 0.0 && (status.is_nan() || status >= 3.0) {
