@@ -1297,6 +1297,33 @@ impl Consistency {
         (if bn * zn > 0.0 { bn.abs().fmin(zn.abs()) } else { 0.0 }, false)
     }
 
+    /// How far a withheld baro still is off its levels, in units of the
+    /// hold: 1 at `FAR` σ off its level against the Doppler integral and
+    /// `NEAR` σ off its level against the GPS altitude, both net of the
+    /// motion's allowance (the smaller of the two; NaN while either level
+    /// is too young to judge). A baro episode opens when both levels are
+    /// `FAR` σ off (`tests`); it holds while the baro stays that far off
+    /// the Doppler level, precise to decimetres over a minute, and still
+    /// `NEAR` σ off the GPS altitude, whose metres of noise hid a step's
+    /// offset once the 6 s windows had passed its jump (battery tune
+    /// #1224: a 15 m step for 89 s under a 1 Hz Gauss–Markov receiver,
+    /// flagged for its first 8 s). The Doppler level alone is no witness:
+    /// it keeps the offset a vertical drag-off integrated, long after the
+    /// GPS altitude came back onto the baro (tune #1292, #1486).
+    fn baro_held_departure(&self) -> f64 {
+        let allow = [K_DYN, K_CLIMB];
+        let (g, d) = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
+        if g.is_nan() || d.is_nan() {
+            return f64::NAN;
+        }
+        (g * crate::track::FAR / crate::track::NEAR).fmin(d)
+    }
+
+    /// A withheld baro is still off its levels (`baro_held_departure`).
+    fn baro_still_off(&self) -> bool {
+        self.baro_held_departure() > 1.0
+    }
+
     /// The baro came back onto its level against the GPS altitude at this
     /// epoch (see `VelocityTrack::returned`), and the jump was the baro's:
     /// its level against the Doppler integral came back too, or jumped by
@@ -1371,7 +1398,7 @@ impl Consistency {
     /// references at this fix (see `altitude_vote`).
     /// `imu_dense`: the IMU is logged often enough to judge (see
     /// `IMU_MAX_PERIOD_S`).
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool, imu_dense: bool, speed_claim: f64) -> (Indicators, bool) {
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool, imu_dense: bool, speed_claim: f64, baro_withheld: bool) -> (Indicators, bool) {
         let (t, y) = (fix.t, fix.y);
         // The receiver's own time, when the log has it, measures the clock
         // whatever the vehicle does (inside episodes too).
@@ -1453,7 +1480,8 @@ impl Consistency {
         // window, against both (see `drift`).
         let allow = [K_DYN, K_CLIMB];
         let (to_gps, to_doppler) = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
-        let dep = if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
+        // A withheld baro is held to a lower bar (`baro_held_departure`).
+        let dep = if baro_withheld { self.baro_held_departure() * GATE } else if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
         out.fold(2, dep.fmax(drift * DRIFT_R_SCALE));
         // The baro's reading held bit for bit while it still arrives (a
         // baro that stops arriving is not judged on its last run).
@@ -1595,6 +1623,8 @@ struct Evidence<'a> {
     /// The position's wander about its velocity track per axis, m
     /// (`VelocityTrack::sigmas`).
     sigma_track: [f64; 3],
+    /// The baro is still off its levels (`Consistency::baro_still_off`).
+    baro_off: bool,
 }
 
 impl Evidence<'_> {
@@ -1967,7 +1997,7 @@ impl Episode {
             // drifted (a stuck baro pulled its height), not the GPS.
             (!(ind.r_group[0] > RECOVER_R) && !(ind.pv > RECOVER_PV)) || ev.on_track
         };
-        let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !ev.departed(2);
+        let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !ev.departed(2) && !(self.withheld.baro() && ev.baro_off);
         self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
         !oracle && !self.imu && self.calm_epochs >= RECOVER_EPOCHS && elapsed > 0.5
     }
@@ -2448,7 +2478,8 @@ impl Detector {
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
         let cons = self.ind.observe_baro(t, baro - self.consistency.alt_int, self.episode.withheld.baro(), motion_of(&kf.velocity()));
         // A held reading follows a hover's filter: not a recovery.
-        let cons = if self.consistency.baro_flat.stuck() { f64::INFINITY } else { cons };
+        // Nor one still off its levels (see `Consistency::baro_held_departure`).
+        let cons = if self.consistency.baro_flat.stuck() || self.consistency.baro_still_off() { f64::INFINITY } else { cons };
         if self.episode.withheld.baro_released(cons) {
             // The withheld baro follows the filter's climb again (its change
             // since before the fault is consistent): the fault is over, but
@@ -2534,7 +2565,7 @@ impl Detector {
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
-        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared, imu_dense, speed_claim);
+        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared, imu_dense, speed_claim, self.episode.withheld.baro());
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let mut verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -2602,6 +2633,7 @@ impl Detector {
             sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
             on_track: self.consistency.track.on_track(),
             sigma_track: self.consistency.track.sigmas(),
+            baro_off: self.consistency.baro_still_off(),
         };
         let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         step.reset |= restart;

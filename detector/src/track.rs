@@ -33,7 +33,7 @@ const SIGMA0_M: f64 = 2.0;
 const LEARN_SIGMAS: f64 = 3.0;
 /// A return: `d` was outside `FAR` σ before the jump and inside `NEAR` σ
 /// after it (norm over the three axes of `(d − base)/σ`).
-const FAR: f64 = 5.0;
+pub const FAR: f64 = 5.0;
 /// Within this many σ of its baseline a level is back (also the detector's
 /// bound on a baro jump seen on both levels, `Consistency::baro_returned`).
 pub const NEAR: f64 = 2.5;
