@@ -3020,7 +3020,7 @@ mod tests {
             prev_r: [0.0; 6],
             r_ref: [0.0; 3],
         }));
-        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None, res, sigma_pos: [0.1; 3], on_track: false, sigma_track: [0.3; 3] }
+        Evidence { ind, r_vel: ind.r_group[1], incoherence: 0.0, dec: None, res, sigma_pos: [0.1; 3], on_track: false, sigma_track: [0.3; 3], baro_off: false }
     }
 
     #[test]
