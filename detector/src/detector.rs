@@ -910,6 +910,10 @@ struct Consistency {
     /// The last GPS epoch the baro's levels saw: (t s, `alt_int` m, GPS
     /// vertical velocity up m/s or NaN when it was not trusted).
     baro_epoch: Option<(f64, f64, f64)>,
+    /// The baro's departure from its levels in units of the hold at the
+    /// last GPS epoch (`held_departure`; NaN while a level cannot judge):
+    /// read at every baro sample, so computed once per epoch.
+    baro_held: f64,
 }
 
 /// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
@@ -1191,6 +1195,7 @@ impl Consistency {
             drag_end: DragEnds::default(),
             baro_flat: Flatline::default(),
             baro_epoch: None,
+            baro_held: f64::NAN,
         }
     }
 
@@ -1297,31 +1302,21 @@ impl Consistency {
         (if bn * zn > 0.0 { bn.abs().fmin(zn.abs()) } else { 0.0 }, false)
     }
 
-    /// How far a withheld baro still is off its levels, in units of the
-    /// hold: 1 at `FAR` σ off its level against the Doppler integral and
+    /// A withheld baro is still off its levels: `baro_held` above 1, which
+    /// is 1 at `FAR` σ off its level against the Doppler integral and
     /// `NEAR` σ off its level against the GPS altitude, both net of the
     /// motion's allowance (the smaller of the two; NaN while either level
-    /// is too young to judge). A baro episode opens when both levels are
-    /// `FAR` σ off (`tests`); it holds while the baro stays that far off
-    /// the Doppler level, precise to decimetres over a minute, and still
-    /// `NEAR` σ off the GPS altitude, whose metres of noise hid a step's
-    /// offset once the 6 s windows had passed its jump (battery tune
-    /// #1224: a 15 m step for 89 s under a 1 Hz Gauss–Markov receiver,
-    /// flagged for its first 8 s). The Doppler level alone is no witness:
-    /// it keeps the offset a vertical drag-off integrated, long after the
-    /// GPS altitude came back onto the baro (tune #1292, #1486).
-    fn baro_held_departure(&self) -> f64 {
-        let allow = [K_DYN, K_CLIMB];
-        let (g, d) = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
-        if g.is_nan() || d.is_nan() {
-            return f64::NAN;
-        }
-        (g * crate::track::FAR / crate::track::NEAR).fmin(d)
-    }
-
-    /// A withheld baro is still off its levels (`baro_held_departure`).
+    /// is too young to judge), at the last GPS epoch. A baro episode opens
+    /// when both levels are `FAR` σ off (`tests`); it holds while the baro
+    /// stays that far off the Doppler level, precise to decimetres over a
+    /// minute, and still `NEAR` σ off the GPS altitude, whose metres of
+    /// noise hid a step's offset once the 6 s windows had passed its jump
+    /// (battery tune #1224: a 15 m step for 89 s under a 1 Hz Gauss–Markov
+    /// receiver, flagged for its first 8 s). The Doppler level alone is no
+    /// witness: it keeps the offset a vertical drag-off integrated, long
+    /// after the GPS altitude came back onto the baro (tune #1292, #1486).
     fn baro_still_off(&self) -> bool {
-        self.baro_held_departure() > 1.0
+        self.baro_held > 1.0
     }
 
     /// The baro came back onto its level against the GPS altitude at this
@@ -1480,8 +1475,9 @@ impl Consistency {
         // window, against both (see `drift`).
         let allow = [K_DYN, K_CLIMB];
         let (to_gps, to_doppler) = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
-        // A withheld baro is held to a lower bar (`baro_held_departure`).
-        let dep = if baro_withheld { self.baro_held_departure() * GATE } else if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
+        // A withheld baro is held to a lower bar (`baro_still_off`).
+        self.baro_held = held_departure(to_gps, to_doppler);
+        let dep = if baro_withheld { self.baro_held * GATE } else if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
         out.fold(2, dep.fmax(drift * DRIFT_R_SCALE));
         // The baro's reading held bit for bit while it still arrives (a
         // baro that stops arriving is not judged on its last run).
@@ -1749,6 +1745,16 @@ impl Withheld {
         }
         Ok(())
     }
+}
+
+/// `Consistency::baro_held` from the baro's departures from its
+/// GPS-altitude and Doppler levels (`VelocityTrack::departure_net`, 1 at
+/// `FAR` σ): 1 at `NEAR` σ off the first and `FAR` σ off the second.
+fn held_departure(to_gps: f64, to_doppler: f64) -> f64 {
+    if to_gps.is_nan() || to_doppler.is_nan() {
+        return f64::NAN;
+    }
+    (to_gps * crate::track::FAR / crate::track::NEAR).fmin(to_doppler)
 }
 
 /// A baro fault is over (a stuck baro reads again, or the baro came back
@@ -2478,7 +2484,7 @@ impl Detector {
         self.ind.observe(6, inn.nu[0], m, inn.s[0]);
         let cons = self.ind.observe_baro(t, baro - self.consistency.alt_int, self.episode.withheld.baro(), motion_of(&kf.velocity()));
         // A held reading follows a hover's filter: not a recovery.
-        // Nor one still off its levels (see `Consistency::baro_held_departure`).
+        // Nor one still off its levels (see `Consistency::baro_still_off`).
         let cons = if self.consistency.baro_flat.stuck() || self.consistency.baro_still_off() { f64::INFINITY } else { cons };
         if self.episode.withheld.baro_released(cons) {
             // The withheld baro follows the filter's climb again (its change
@@ -3443,7 +3449,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_flat, baro_epoch });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_flat, baro_epoch, baro_held });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

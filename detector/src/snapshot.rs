@@ -71,8 +71,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// return jump is measured on. 20: a drag-off's end is confirmed on the
 /// vertical too (`dragend::DragEnds`). 21: the receiver's usual speed
 /// accuracy claim (`ReceiverQuality::speed`) and the epoch's claim scale in
-/// the indicator engine.
-pub const VERSION: u32 = 21;
+/// the indicator engine. 22: the withheld baro's departure from its levels
+/// (`Consistency::baro_held`).
+pub const VERSION: u32 = 22;
 
 #[derive(Clone)]
 struct Header {

@@ -54,12 +54,13 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // claim (a 28th column, the DataFlash `UBX3` record, the usual claim's
 // state and codec, the scaled velocity tests with their window maxima,
 // not on declared fixes; the drift test's claim as a prior) adds 2,492 B:
-// 306,213 B. The budget
+// 306,213 B, and its baro hold 279 B more: 306,492 B, 708 B under the goal.
+// The budget
 // guards today's size plus 0.5 KB: a
 // change that crosses it must find the bytes elsewhere, or raise it with
 // the reason, never past the goal, which the last test asserts.
 const FIRST_USE_GOAL = 307_200;
-const CORE_WASM_BUDGET = 306_500;
+const CORE_WASM_BUDGET = 307_000;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;
