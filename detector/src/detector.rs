@@ -866,6 +866,24 @@ impl LastEstimate {
     }
 }
 
+/// What the tests stage (`Consistency::tests`) needs to know about the
+/// epoch beyond the fix.
+#[derive(Clone, Copy, Debug)]
+struct EpochState {
+    /// The GPS velocity is withheld (a fault verdict on it).
+    vel_withheld: bool,
+    /// The baro is withheld: held to a lower bar (`Consistency::baro_still_off`).
+    baro_withheld: bool,
+    /// The receiver is trusted enough to teach the clock rate.
+    learn_rate: bool,
+    /// The receiver declares this fix degraded (`ReceiverQuality`).
+    declared: bool,
+    /// The IMU is logged often enough to judge (`IMU_MAX_PERIOD_S`).
+    imu_dense: bool,
+    /// The receiver's speed accuracy claim against its usual one (≥ 1).
+    speed_claim: f64,
+}
+
 /// Running integrals that the filter-independent consistency tests (see
 /// `indicators`) compare the sensors against. They advance with every
 /// prediction and are read at baro samples and GPS epochs.
@@ -1387,13 +1405,10 @@ impl Consistency {
 
     /// The tests stage: feed the fix to the position–velocity, baro–GPS and
     /// IMU consistency tests, decide whether the IMU test joins R, and close
-    /// the epoch's indicators. `vel_withheld`: the GPS velocity is withheld;
-    /// `learn_rate`: the receiver is trusted enough to teach the clock rate.
+    /// the epoch's indicators, given what the epoch already knows (`e`).
     /// Also returns whether the GPS altitude came back onto both its other
     /// references at this fix (see `altitude_vote`).
-    /// `imu_dense`: the IMU is logged often enough to judge (see
-    /// `IMU_MAX_PERIOD_S`).
-    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, vel_withheld: bool, learn_rate: bool, declared: bool, imu_dense: bool, speed_claim: f64, baro_withheld: bool) -> (Indicators, bool) {
+    fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, e: EpochState) -> (Indicators, bool) {
         let (t, y) = (fix.t, fix.y);
         // The receiver's own time, when the log has it, measures the clock
         // whatever the vehicle does (inside episodes too).
@@ -1406,14 +1421,14 @@ impl Consistency {
         // (`track`) integrates the same velocities, across short gaps too.
         let track_dt = match (&fix.vel, self.last_gps) {
             (Some(v), Some((pt, pp, pv))) if t - pt > 0.0 && t - pt < PV_MAX_DT_S => {
-                if learn_rate {
+                if e.learn_rate {
                     self.rate.observe((pt, pp, pv), t, &y, v);
                 }
                 let dtg = (t - pt) * self.rate.scale;
                 let u = core::array::from_fn(|a| (y[a] - pp[a]) - 0.5 * (v[a] + pv[a]) * dtg);
-                ind.observe_pv(u, !vel_withheld);
+                ind.observe_pv(u, !e.vel_withheld);
                 // A withheld velocity is suspect: nothing to integrate.
-                if vel_withheld {
+                if e.vel_withheld {
                     self.track.clear();
                     None
                 } else {
@@ -1422,7 +1437,7 @@ impl Consistency {
                 }
             }
             // A dropped record or two: the track integrates across the gap.
-            (Some(v), Some((pt, _, pv))) if !vel_withheld && t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S => {
+            (Some(v), Some((pt, _, pv))) if !e.vel_withheld && t - pt > 0.0 && t - pt < TRACK_MAX_GAP_S => {
                 ind.clear_pv();
                 let dt = (t - pt) * self.rate.scale;
                 self.track.step(dt, y.into(), (*v).into(), pv.into());
@@ -1438,14 +1453,14 @@ impl Consistency {
         // Not across a fix the receiver calls degraded: its position walks
         // off by design, and the walk's end would read as a ramp.
         let ramp = match (track_dt, self.track.d()) {
-            (Some(dt), Some(d)) if !declared => self.ramp.push(dt, d, [fix.eph, fix.epv], speed_claim),
+            (Some(dt), Some(d)) if !e.declared => self.ramp.push(dt, d, [fix.eph, fix.epv], e.speed_claim),
             _ => {
                 self.ramp.clear();
                 f64::NAN
             }
         };
         self.last_gps = fix.vel.map(|v| (t, y, v));
-        let drift = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !vel_withheld), fix.epv);
+        let drift = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !e.vel_withheld), fix.epv);
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
             ind.observe_baro_gps(t, b + y[2], fix.vel.as_ref().map_or([f64::NAN; 2], motion_of));
@@ -1458,15 +1473,15 @@ impl Consistency {
             ind.clear_imu();
             self.imu_gap = false;
         }
-        let z3 = fix.vel.filter(|_| !declared).map(|v| [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1], v[2] - self.dv_imu[2]]);
+        let z3 = fix.vel.filter(|_| !e.declared).map(|v| [v[0] - self.dv_imu[0], v[1] - self.dv_imu[1], v[2] - self.dv_imu[2]]);
         match z3 {
             Some(z) => ind.observe_imu(t, z),
             None => ind.clear_imu(),
         }
         // The same `z` measures a drag-off's end (see `dragend`); an IMU gap
         // left changes out of `dv_imu`, so it restarts there.
-        self.drag_end.push(t, z3.filter(|_| !imu_gap && !vel_withheld));
-        ind.set_imu_fold(imu_dense && self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
+        self.drag_end.push(t, z3.filter(|_| !imu_gap && !e.vel_withheld));
+        ind.set_imu_fold(e.imu_dense && self.flight_time >= IMU_ARM_S && ind.imu_learnt() >= IMU_ARM_WINDOWS);
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).
         out.fold(0, ramp * RAMP_R_SCALE);
@@ -1477,7 +1492,7 @@ impl Consistency {
         let (to_gps, to_doppler) = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
         // A withheld baro is held to a lower bar (`baro_still_off`).
         self.baro_held = held_departure(to_gps, to_doppler);
-        let dep = if baro_withheld { self.baro_held * GATE } else if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
+        let dep = if e.baro_withheld { self.baro_held * GATE } else if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
         out.fold(2, dep.fmax(drift * DRIFT_R_SCALE));
         // The baro's reading held bit for bit while it still arrives (a
         // baro that stops arriving is not judged on its last run).
@@ -2571,7 +2586,8 @@ impl Detector {
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
-        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, vel_withheld, learn_rate, declared, imu_dense, speed_claim, self.episode.withheld.baro());
+        let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim };
+        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, epoch);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let mut verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
