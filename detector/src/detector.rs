@@ -324,6 +324,14 @@ const VOTE_BACK: f64 = 0.5;
 /// The baro drift statistic's scale into the baro group's R: its hold level
 /// (`drift::DRIFT_Z`) lands just above the ANFIS boundary (R ≈ 2.55).
 const DRIFT_R_SCALE: f64 = 2.8 / crate::drift::DRIFT_Z;
+/// A drift whose statistic stopped growing (`drift::PLATEAU_S`) is
+/// released only when the baro's levels see it within this share of their
+/// own hold bar (`held_departure`: 2.5σ off its Doppler level): the
+/// change it held is then one the levels learnt as the baro's wander (a
+/// fixed wing's static port at a new airspeed, battery tune #1207), not a
+/// baro step the levels still see (battery eval #27: 12.7 m for 79 s,
+/// held at about 1).
+const PLATEAU_HELD: f64 = 0.5;
 /// The position ramp statistic's scale into the position group's R, the
 /// same way (`ramp::RAMP_Z` just above the boundary).
 const RAMP_R_SCALE: f64 = 2.8 / crate::ramp::RAMP_Z;
@@ -1266,7 +1274,7 @@ impl Consistency {
     /// there learnt the faulty baro as the new level, and its return was
     /// flagged for up to 120 s (battery tune #131). Returns the baro drift
     /// statistic (see `drift`), NaN when not judged.
-    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64) -> f64 {
+    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64) -> (f64, (f64, f64)) {
         let vup = v.map_or(f64::NAN, |v| -v[2]);
         let prev = self.baro_epoch.replace((t, self.alt_int, vup));
         let baro = self.last_baro.filter(|(tb, _)| t - tb < 0.5).map(|(_, b)| b);
@@ -1274,7 +1282,8 @@ impl Consistency {
             self.baro_gps_level.clear();
             self.baro_dop_level.clear();
             self.baro_drift.clear();
-            return f64::NAN;
+            self.baro_held = f64::NAN;
+            return (f64::NAN, (f64::NAN, f64::NAN));
         };
         let dt = (t - pt) * self.rate.scale;
         self.baro_gps_level.step(dt, [b + y[2], 0.0, 0.0], [0.0; 3], [0.0; 3]);
@@ -1287,7 +1296,11 @@ impl Consistency {
         for lv in [&mut self.baro_gps_level, &mut self.baro_dop_level] {
             lv.set_motion([motion.speed2, motion.climb]);
         }
-        self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv)
+        let allow = [K_DYN, K_CLIMB];
+        let deps = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
+        self.baro_held = held_departure(deps.0, deps.1);
+        let level_off = !(self.baro_held < PLATEAU_HELD);
+        (self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv, level_off), deps)
     }
 
     /// The GPS altitude's departure from its two other vertical references
@@ -1460,7 +1473,7 @@ impl Consistency {
             }
         };
         self.last_gps = fix.vel.map(|v| (t, y, v));
-        let drift = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !e.vel_withheld), fix.epv);
+        let (drift, (to_gps, to_doppler)) = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !e.vel_withheld), fix.epv);
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
             ind.observe_baro_gps(t, b + y[2], fix.vel.as_ref().map_or([f64::NAN; 2], motion_of));
@@ -1488,10 +1501,8 @@ impl Consistency {
         // The baro's level: condemned only when it left both references
         // (NaN, not judged, unless both are); and its drift over a long
         // window, against both (see `drift`).
-        let allow = [K_DYN, K_CLIMB];
-        let (to_gps, to_doppler) = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
-        // A withheld baro is held to a lower bar (`baro_still_off`).
-        self.baro_held = held_departure(to_gps, to_doppler);
+        // A withheld baro is held to a lower bar (`baro_still_off`,
+        // `baro_held`, computed with the levels).
         let dep = if e.baro_withheld { self.baro_held * GATE } else if to_gps.is_nan() || to_doppler.is_nan() { f64::NAN } else { to_gps.fmin(to_doppler) * GATE };
         out.fold(2, dep.fmax(drift * DRIFT_R_SCALE));
         // The baro's reading held bit for bit while it still arrives (a

@@ -87,6 +87,15 @@ pub const DRIFT_Z: f64 = 3.0;
 const SMOOTH_S: f64 = 2.0;
 /// Statistic below which a drift being judged is over.
 const RELEASE_Z: f64 = 2.0;
+/// A drift being judged whose statistic has not grown by `GROW_Z` for
+/// `PLATEAU_S` true s is over: the baro's error moved and then held (a
+/// fixed wing's static port at a new airspeed, which its ground speed
+/// does not show: battery tune #1207, 5 m in 10 s, then held for 80 s),
+/// which is a level, judged by the levels' own departure test, not a
+/// drift. A drift of 0.1 m/s grows by 2 m in that time, more than
+/// `GROW_Z` σ on a receiver that can see it.
+const PLATEAU_S: f64 = 30.0;
+const GROW_Z: f64 = 0.5;
 
 /// How far a healthy baro's error may move between motions `a` and `b`, m.
 fn allowance(a: &Motion, b: &Motion) -> f64 {
@@ -122,6 +131,10 @@ pub struct DriftTest {
     smooth: Option<[f64; 2]>,
     /// A drift is being judged (see the module docs).
     judging: bool,
+    /// While judging: the largest statistic so far and when it last grew
+    /// by `GROW_Z` (true s), see `PLATEAU_S`.
+    peak: f64,
+    t_grew: f64,
     /// The last epoch ended a drift with the GPS altitude back on the
     /// baro's level and the Doppler integral still off.
     returned: bool,
@@ -157,7 +170,7 @@ impl DriftTest {
     /// accuracy claim `claim_v` (m, NaN when none). Returns the drift
     /// statistic (see the module docs); NaN while the window spans less
     /// than `SPAN_S`.
-    pub fn push(&mut self, dt: f64, level: [f64; 2], motion: Motion, claim_v: f64) -> f64 {
+    pub fn push(&mut self, dt: f64, level: [f64; 2], motion: Motion, claim_v: f64, level_off: bool) -> f64 {
         self.last = [f64::NAN; 2];
         self.pending = None;
         self.returned = false;
@@ -208,7 +221,12 @@ impl DriftTest {
             // vertical drag-off is one jump: read on this fix alone, not
             // after the smoothing has followed it.
             let z_raw = net_change(&e0, &raw, 1.0)[0].abs() / self.sigma(0);
-            if full < RELEASE_Z || (z_raw < RELEASE_Z && z[1] >= DRIFT_Z) {
+            if full >= self.peak + GROW_Z {
+                self.peak = full;
+                self.t_grew = t;
+            }
+            let held = t - self.t_grew > PLATEAU_S && !level_off;
+            if full < RELEASE_Z || (z_raw < RELEASE_Z && z[1] >= DRIFT_Z) || held {
                 self.judging = false;
                 self.returned = z_raw.fmin(z[0]) < RELEASE_Z && z[1] >= DRIFT_Z;
                 self.window.restart();
@@ -221,6 +239,8 @@ impl DriftTest {
         let going_on = (0..2).all(|k| recent[k] * self.last[k] > 0.0);
         let stat = if going_on { full.fmin(zr[0]).fmin(zr[1]) } else { 0.0 };
         self.judging = stat >= DRIFT_Z;
+        self.peak = stat;
+        self.t_grew = t;
         stat
     }
 
@@ -258,7 +278,7 @@ mod tests {
     fn run(d: &mut DriftTest, t0: f64, n: usize, hz: f64, f: &dyn Fn(f64) -> [f64; 2]) -> Vec<f64> {
         (0..n)
             .map(|i| {
-                let s = d.push(1.0 / hz, f(t0 + i as f64 / hz), CRUISE, f64::NAN);
+                let s = d.push(1.0 / hz, f(t0 + i as f64 / hz), CRUISE, f64::NAN, true);
                 if !(s >= DRIFT_Z) {
                     d.learn();
                 }
@@ -298,7 +318,7 @@ mod tests {
             let t = i as f64 / 10.0;
             let x = 0.5 * (t - 40.0).clamp(0.0, 60.0);
             let gps = if t < 100.0 { x } else { 0.0 };
-            let s = d.push(0.1, [gps, x], CRUISE, f64::NAN);
+            let s = d.push(0.1, [gps, x], CRUISE, f64::NAN, true);
             if !(s >= DRIFT_Z) {
                 d.learn();
             }
@@ -329,6 +349,39 @@ mod tests {
     }
 
     #[test]
+    fn a_change_that_stopped_growing_is_released_unless_the_levels_still_see_it() {
+        // The baro's error moves 10 m in 10 s (from 60 s) and then holds:
+        // called as a drift; released once the statistic has not grown by
+        // `GROW_Z` for `PLATEAU_S`, unless the levels still hold the baro
+        // off (`level_off`), when it is judged until the window's start
+        // goes stale.
+        let lvl = |t: f64| {
+            let x = (t - 60.0).clamp(0.0, 10.0);
+            [x, x]
+        };
+        let judged = |level_off: bool| {
+            let mut d = DriftTest::default();
+            let (mut first, mut last) = (f64::NAN, f64::NAN);
+            for i in 0..2000 {
+                let t = i as f64 / 10.0;
+                if d.push(0.1, lvl(t), CRUISE, f64::NAN, level_off) >= DRIFT_Z {
+                    first = first.fmin(t);
+                    last = t;
+                } else {
+                    d.learn();
+                }
+            }
+            (first, last)
+        };
+        let (released, held) = (judged(false), judged(true));
+        assert!(released.0 == held.0 && released.0 < 70.0, "called at {} and {}", released.0, held.0);
+        // The last growth by `GROW_Z` near 72.6 s (the smoothing's lag),
+        // plus `PLATEAU_S`.
+        assert!((released.1 - 102.6).abs() < 0.5, "released at {}", released.1);
+        assert!(held.1 > 150.0, "held until {}", held.1);
+    }
+
+    #[test]
     fn a_gps_only_change_or_opposite_changes_are_not_a_drift() {
         let mut d = DriftTest::default();
         let s = run(&mut d, 0.0, 900, 5.0, &|t| [0.5 * t, 0.0]);
@@ -352,7 +405,7 @@ mod tests {
         for i in 0..1300 {
             let t = i as f64 / 10.0;
             let (m, e) = at(t);
-            let s = d.push(0.1, [e, e], m, f64::NAN);
+            let s = d.push(0.1, [e, e], m, f64::NAN, true);
             worst = worst.max(s.max(0.0));
             d.learn();
         }
@@ -406,5 +459,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(DriftTest { t, window, ms, pending, last, last_span, dt, motion, claim_v, smooth, judging, returned });
+    impl_codec!(DriftTest { t, window, ms, pending, last, last_span, dt, motion, claim_v, smooth, judging, peak, t_grew, returned });
 }

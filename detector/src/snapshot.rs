@@ -72,8 +72,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// vertical too (`dragend::DragEnds`). 21: the receiver's usual speed
 /// accuracy claim (`ReceiverQuality::speed`) and the epoch's claim scale in
 /// the indicator engine. 22: the withheld baro's departure from its levels
-/// (`Consistency::baro_held`).
-pub const VERSION: u32 = 22;
+/// (`Consistency::baro_held`). 23: the baro drift test's peak statistic
+/// and when it last grew (`DriftTest::peak`, `t_grew`).
+pub const VERSION: u32 = 23;
 
 #[derive(Clone)]
 struct Header {
