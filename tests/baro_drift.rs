@@ -101,3 +101,21 @@ fn a_drift_plateau_after_an_early_baro_step_is_released() {
     let fp = r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count();
     assert!(fp <= 350, "{fp} false-positive epochs (517 before)");
 }
+
+/// Regression: tune #1427 (survey, 10 Hz Gauss–Markov receiver σ 1.52 m,
+/// consumer IMU): a 0.41 m/s vertical drag-off from 13.7 s to 39.8 s,
+/// before the baro's levels could judge it. Its end, the GPS altitude
+/// dropping 11 m back onto the baro while the Doppler integral kept what
+/// the dragged velocity integrated, was judged as a vertical step and
+/// flagged for the 60 s coast limit (605 false-positive epochs). The GPS
+/// altitude's level against the baro coming back with the Doppler level
+/// unmoved is now the GPS's return (`Consistency::vertical_return`): the
+/// detector re-anchors on it.
+#[test]
+fn a_gps_altitude_back_on_the_baro_after_an_early_drag_off_is_its_return() {
+    let f = Flight::draw(Split::Tune, 1427);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("drag-off", battery::Axis::Vertical));
+    assert!(f.faults[0].start < 20.0);
+    let (n, of) = common::flagged_after_fault(&f, 0, 60.0);
+    assert!(of > 500 && n <= 5, "{n} of {of} epochs flagged in the 60 s after the drag-off");
+}

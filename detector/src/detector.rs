@@ -1350,27 +1350,32 @@ impl Consistency {
         self.baro_held > 1.0
     }
 
-    /// The baro came back onto its level against the GPS altitude at this
-    /// epoch (see `VelocityTrack::returned`), and the jump was the baro's:
-    /// its level against the Doppler integral came back too, or jumped by
-    /// the same amount (that level's baseline may have learnt a fault that
-    /// was not flagged to its end: battery tune #232, a 9.4 m step whose
-    /// last 4 s passed as normal, then 6 s of flags on its return). A GPS
-    /// altitude fault's end moves only the first level.
-    fn baro_returned(&self) -> bool {
+    /// The level against the GPS altitude came back at this epoch (see
+    /// `VelocityTrack::returned`): whose return it was. The baro's
+    /// (`Some(true)`) when its level against the Doppler integral came
+    /// back too, or jumped by the same amount (that level's baseline may
+    /// have learnt a fault that was not flagged to its end: battery tune
+    /// #232, a 9.4 m step whose last 4 s passed as normal, then 6 s of
+    /// flags on its return). Else the GPS altitude's (`Some(false)`): it
+    /// came back onto the baro while the Doppler integral, which carries
+    /// no position fault and kept what a dragged velocity integrated, did
+    /// not move (a GPS vertical step's or drag-off's end: tune #1427, a
+    /// 0.41 m/s drag for 26 s from 13.7 s, whose 11 m return was judged as
+    /// a step for 60 s).
+    fn vertical_return(&self) -> Option<bool> {
         if !self.baro_gps_level.returned() {
-            return false;
+            return None;
         }
         if self.baro_dop_level.returned() {
-            return true;
+            return Some(true);
         }
-        match (self.baro_gps_level.offset(0), self.baro_dop_level.offset(0)) {
+        Some(match (self.baro_gps_level.offset(0), self.baro_dop_level.offset(0)) {
             (Some((g, gp, _)), Some((d, dp, sd))) => {
                 let (jg, jd) = (g - gp, d - dp);
                 (jd - jg).abs() < BARO_JUMP_AGREE * jg.abs() && (jd - jg).abs() < crate::track::NEAR * sd
             }
             _ => false,
-        }
+        })
     }
 
     /// A position episode's jump confirmed, over the seconds after it, as
@@ -2620,13 +2625,18 @@ impl Detector {
         // position on its velocity track after a ramp (see `ramp`), or its
         // altitude back onto both the baro and its own vertical velocity
         // integrated after they both condemned it (`altitude_vote`).
-        let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back;
+        // Or its altitude back onto the baro's level while the Doppler
+        // integral stayed (`vertical_return`), during an episode or at a
+        // fault verdict.
+        let judged = !self.oracle && (self.episode.active || verdict.fault);
+        let vertical = if judged { self.consistency.vertical_return() } else { None };
+        let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back || vertical == Some(false);
         // The baro back on both its levels, from beyond `FAR` σ to within
         // `NEAR` (see `track`): the end of a baro fault. The jump back is
         // in the baro's 6 s windows and its Δr, which a baro released
         // during the fault had re-based on the faulty level (battery tune
         // #175: a 7.9 m step for 66 s, its end flagged for 5.6 s).
-        let baro_back = !self.oracle && (self.episode.active || verdict.fault) && self.consistency.baro_returned();
+        let baro_back = vertical == Some(true);
         if baro_back {
             restart_baro(Some(&mut *kf), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
             // The drift window's start may sit on the fault's level (one

@@ -35,7 +35,7 @@ const LEARN_SIGMAS: f64 = 3.0;
 /// after it (norm over the three axes of `(d − base)/σ`).
 pub const FAR: f64 = 5.0;
 /// Within this many σ of its baseline a level is back (also the detector's
-/// bound on a baro jump seen on both levels, `Consistency::baro_returned`).
+/// bound on a baro jump seen on both levels, `Consistency::vertical_return`).
 pub const NEAR: f64 = 2.5;
 /// Outlying this long, the baseline is re-learnt from the current `d`, s:
 /// a receiver whose track moved for good (a re-acquisition) is not judged
