@@ -95,3 +95,34 @@ fn a_ramp_is_flagged_for_as_long_as_it_lasts() {
     // here and is absorbed; its sudden end then opens an episode of its own
     // (a known gap, README "Known gaps").
 }
+
+/// Regression: battery tune #684 (fixed wing, 2 Hz Gauss–Markov receiver
+/// σ 0.41 m): a 19.9 m step for 94 s was flagged for its first 60 s (the
+/// position-only coast limit), 64% of it. The velocity did not shift along
+/// the jump by the (about) 0.16 m/s that a drag-off as old as the flight would
+/// need, so the jump cannot be a drag-off's end (`DragEnds::ruled_out`):
+/// the episode is judged for up to 120 s.
+#[test]
+fn a_step_that_cannot_be_a_drag_off_end_is_judged_past_60_s() {
+    use navguard::battery::{self, Flight, Split};
+    let f = Flight::draw(Split::Tune, 684);
+    assert_eq!(f.faults[0].kind.name(), "step");
+    assert!(f.faults[0].duration() > 90.0);
+    let r = battery::run(&f, &Config::default()).unwrap();
+    assert!(r.events[0].share >= 0.95, "{:.0}% of the step flagged", 100.0 * r.events[0].share);
+}
+
+/// Regression: battery tune #656 (fixed wing, 5 Hz Gauss–Markov receiver
+/// σ 0.73 m): a 0.37 m/s position ramp from 5.6 s to 27.4 s, before the
+/// ramp test could judge, ended with an 8 m jump back that was judged as
+/// a step (286 false-positive epochs). The GPS position's track now judges
+/// a return to its origin from 10 s of age (`VelocityTrack::quick`).
+#[test]
+fn the_end_of_a_ramp_from_the_first_seconds_is_its_return() {
+    use navguard::battery::{self, Flight, Split};
+    let f = Flight::draw(Split::Tune, 656);
+    assert_eq!(f.faults[0].kind.name(), "ramp");
+    let r = battery::run(&f, &Config::default()).unwrap();
+    let fp = r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count();
+    assert!(fp <= 10, "{fp} false-positive epochs (286 before)");
+}

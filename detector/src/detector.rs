@@ -297,6 +297,14 @@ const SILENT_OUTAGE_S: f64 = 1.5;
 /// flagged), while 60 s without the hold gave 0.831 and 6.5%, and the same
 /// 3 of 6 60 s steps passed.
 const POSITION_COAST_S: f64 = 60.0;
+/// s: the same for a position-only episode whose opening jump was shown
+/// not to be a drag-off's end (`DragEnds::ruled_out`): the velocity did
+/// not shift along the jump by the rate a drag as old as the flight would
+/// need, so the jump is a step's onset, and a step lasts as long as it
+/// lasts (battery: 10–20 m steps of 60–120 s flagged for their first
+/// 60 s). The longest fault the battery draws is 120 s; beyond this the
+/// fix is re-anchored onto and its offset kept (`Episode::accepted`).
+const POSITION_COAST_LONG_S: f64 = 120.0;
 /// A return jump must undo an offset of at least this many σ_Δ...
 const RETURN_MIN_SIGMAS: f64 = 6.0;
 // ...and, along the offset's direction, between `track::RETURN_UNDONE`
@@ -1213,7 +1221,7 @@ impl Consistency {
             last_gps: None,
             last_baro: None,
             rate: ClockRate::new(),
-            track: VelocityTrack::default(),
+            track: VelocityTrack::quick(),
             baro_gps_level: VelocityTrack::default(),
             baro_dop_level: VelocityTrack::default(),
             baro_drift: DriftTest::default(),
@@ -1852,6 +1860,9 @@ struct Episode {
     /// onto when it coasted out: the fault the filter stopped judging. A
     /// later jump that undoes it is that fault's end, not a new one.
     accepted: Option<[f64; 3]>,
+    /// The position jump that opened this episode was no drag-off's end
+    /// (`DragEnds::ruled_out`): it is judged for `POSITION_COAST_LONG_S`.
+    long_coast: bool,
 }
 
 /// What the episode stage decided at a GPS epoch.
@@ -1978,7 +1989,7 @@ impl Episode {
         if self.receiver_lost {
             max_coast
         } else {
-            max_coast.fmax(POSITION_COAST_S)
+            max_coast.fmax(if self.long_coast { POSITION_COAST_LONG_S } else { POSITION_COAST_S })
         }
     }
 
@@ -2043,6 +2054,7 @@ impl Episode {
     fn normal_epoch(&mut self) {
         self.calm_epochs = 0;
         self.coast_start = None;
+        self.long_coast = false;
         self.withheld.release();
         // A single normal verdict inside a coast does not end it: the
         // filter's offset is still the coast's until the GPS has been
@@ -2059,6 +2071,7 @@ impl Episode {
     fn reanchored(&mut self) {
         self.coast_start = None;
         self.calm_epochs = 0;
+        self.long_coast = false;
         self.withheld.release();
         self.receiver_lost = false;
     }
@@ -2645,6 +2658,7 @@ impl Detector {
             self.consistency.baro_drift.clear();
         }
         let drag_end = self.consistency.drag_ended(fix.t, self.episode.active);
+        self.episode.long_coast |= self.consistency.drag_end.ruled_out();
         if drag_end {
             // The confirmation can take a step's onset for a drag-off's end
             // (a manoeuvre moved the velocity's mean; battery tune #599): the
@@ -3492,6 +3506,6 @@ mod codec_impls {
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });
     impl_codec!(Methods { prev_nu, maha, baro_inn, pool });
     impl_codec!(Withheld { groups, baro_calm });
-    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted });
+    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted, long_coast });
     impl_codec!(Learning { anfis, d1, d2, new_faults, d0_x, d0_y } skip { train_x, train_y, cost });
 }

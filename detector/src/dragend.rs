@@ -92,11 +92,15 @@ pub struct DragEnd {
     /// Judges one axis (the vertical, first; the second is 0), so the
     /// shift's RMS is learnt from that axis alone.
     one_axis: bool,
+    /// The last judged jump cannot have been a drag-off's end: the shift
+    /// is `Z` σ short of the rate the jump would need over the time flown
+    /// (see `confirmed`). Cleared when a jump is armed.
+    ruled_out: bool,
 }
 
 impl Default for DragEnd {
     fn default() -> Self {
-        DragEnd { recent: Vec::new(), pending: None, ms: SHIFT_SIGMA0 * SHIFT_SIGMA0, learnt: 0.0, one_axis: false }
+        DragEnd { recent: Vec::new(), pending: None, ms: SHIFT_SIGMA0 * SHIFT_SIGMA0, learnt: 0.0, one_axis: false, ruled_out: false }
     }
 }
 
@@ -136,6 +140,7 @@ impl DragEnd {
     /// the confirmation. The newest entry is the first after the jump.
     pub fn arm(&mut self, t: f64, jump: [f64; 2]) {
         self.pending = None;
+        self.ruled_out = false;
         let len = (jump[0] * jump[0] + jump[1] * jump[1]).sqrt();
         let Some(&(tn, zn)) = self.recent.last() else { return };
         if !(len > 0.0 && len.is_finite()) || tn != t {
@@ -176,6 +181,9 @@ impl DragEnd {
         let sigma = (var * (1.0 / p.n_b + 1.0 / p.n_a)).sqrt().fmax(self.ms.sqrt());
         let shift = mean_a - p.mean_b;
         let age = p.len / shift;
+        // A drag-off older than the flight is impossible: its rate is at
+        // least the jump over the time flown.
+        self.ruled_out = shift + Z * sigma < p.len / flown;
         shift > Z * sigma && (MIN_AGE_S..=flown).contains(&age)
     }
 
@@ -212,6 +220,7 @@ impl DragEnd {
     /// Disarm (the episode ended or the filter re-anchored).
     pub fn disarm(&mut self) {
         self.pending = None;
+        self.ruled_out = false;
     }
 
     /// A confirmation is armed.
@@ -272,6 +281,12 @@ impl DragEnds {
         self.h.disarm();
         self.v.disarm();
     }
+
+    /// The last judged jump was no drag-off's end on either axis it moved
+    /// along (see `DragEnd::ruled_out`).
+    pub fn ruled_out(&self) -> bool {
+        self.h.ruled_out || self.v.ruled_out
+    }
 }
 
 #[cfg(test)]
@@ -309,6 +324,29 @@ mod tests {
         let at = at.expect("confirmed");
         assert!(at <= 12.3, "confirmed at {at}");
         assert!(!d.armed());
+    }
+
+    #[test]
+    fn a_jump_too_large_for_a_drag_as_old_as_the_flight_is_ruled_out() {
+        // A 20 m jump north with the velocity unmoved (0.05 m/s of noise,
+        // σ of the shift at its 0.15 m/s prior): 40 s flown, a drag-off's
+        // end would have moved it by at least 0.5 m/s, beyond `Z` σ. 1000 s
+        // flown, 0.02 m/s would do: not ruled out. Disarming forgets it.
+        for (flown, ruled) in [(40.0, true), (1000.0, false)] {
+            let (mut d, mut rng) = (DragEnd::default(), Rng::new(3));
+            feed(&mut d, &mut rng, 0.0, 10.0, 0.05, 0.0);
+            d.push(10.0, Some([0.0, 0.0]));
+            d.arm(10.0, [20.0, 0.0]);
+            let mut t = 10.2;
+            while d.armed() && t < 14.0 {
+                d.push(t, Some([0.05 * rng.normal(), 0.3 * rng.normal()]));
+                assert!(!d.confirmed(t, flown));
+                t += 0.2;
+            }
+            assert_eq!(d.ruled_out, ruled, "flown {flown}");
+            d.disarm();
+            assert!(!d.ruled_out);
+        }
     }
 
     #[test]
@@ -431,6 +469,6 @@ mod codec_impls {
     use crate::codec::impl_codec;
 
     impl_codec!(Pending { t0, u, len, n_b, mean_b, ss_b, n_a, sum_a, sum2_a });
-    impl_codec!(DragEnd { recent, pending, ms, learnt, one_axis });
+    impl_codec!(DragEnd { recent, pending, ms, learnt, one_axis, ruled_out });
     impl_codec!(DragEnds { h, v });
 }

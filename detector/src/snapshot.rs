@@ -73,8 +73,11 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// accuracy claim (`ReceiverQuality::speed`) and the epoch's claim scale in
 /// the indicator engine. 22: the withheld baro's departure from its levels
 /// (`Consistency::baro_held`). 23: the baro drift test's peak statistic
-/// and when it last grew (`DriftTest::peak`, `t_grew`).
-pub const VERSION: u32 = 23;
+/// and when it last grew (`DriftTest::peak`, `t_grew`). 24: a drag-off's
+/// end ruled out (`DragEnd::ruled_out`), the episode's long coast
+/// (`Episode::long_coast`), the GPS track's quick origin
+/// (`VelocityTrack::quick_origin`).
+pub const VERSION: u32 = 24;
 
 #[derive(Clone)]
 struct Header {

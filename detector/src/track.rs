@@ -43,6 +43,9 @@ pub const NEAR: f64 = 2.5;
 const RELEARN_S: f64 = 120.0;
 /// Span of the track's first learnt epochs whose mean is its origin, s.
 const ORIGIN_S: f64 = 5.0;
+/// Age from which a quick track judges a return to its origin, s (see
+/// `VelocityTrack::quick_origin`).
+const QUICK_ORIGIN_S: f64 = 10.0;
 /// Share of an offset that a return jump takes back: of the baseline's
 /// offset from the origin here, of a fault's offset in the detector's
 /// episodes.
@@ -97,12 +100,22 @@ pub struct VelocityTrack {
     /// Learnt mean square of `d`'s change from one epoch to the next per
     /// axis, m² (0 before any): the scale a jump is measured on.
     ms_step: [f64; 3],
+    /// A return to the origin is judged from `QUICK_ORIGIN_S` of age, not
+    /// `MIN_AGE_S` (the GPS position's track: see `back_to_origin`). Kept
+    /// across `clear`.
+    quick_origin: bool,
 }
 
 impl VelocityTrack {
     /// Restart (a velocity gap: the integral has nothing to continue).
     pub fn clear(&mut self) {
-        *self = VelocityTrack::default();
+        *self = VelocityTrack { quick_origin: self.quick_origin, ..VelocityTrack::default() };
+    }
+
+    /// A track whose return to the origin is judged early (see
+    /// `quick_origin`).
+    pub fn quick() -> Self {
+        VelocityTrack { quick_origin: true, ..VelocityTrack::default() }
     }
 
     /// One GPS interval of `dt` true s: position `y` (m) and velocity `v`
@@ -146,12 +159,17 @@ impl VelocityTrack {
     /// moved `NEAR` of those toward it (the track
     /// learnt the fault; a baseline still at the origin needs no return:
     /// tune #273's aggressive flight jumped a level 1.6 m in one epoch).
-    /// A position ramp from the first seconds (tune #656) is still not
-    /// caught.
+    /// A position ramp from the first seconds that ends before the track
+    /// is `MIN_AGE_S` old (tune #656: 0.37 m/s from 5.6 s to 27.4 s, its
+    /// end judged as a step) is caught on the GPS position's track, which
+    /// judges its origin from `QUICK_ORIGIN_S` (`quick_origin`): its
+    /// `d` holds still to centimetres on a healthy receiver. Not on the
+    /// baro's levels, whose early wander passed for a return (battery eval
+    /// #238: its Doppler level re-based 10 s in, a later drift missed).
     fn back_to_origin(&mut self) {
         self.at_origin = false;
         let (Some(d), Some(p)) = (self.d, self.d_prev) else { return };
-        if self.origin_age < ORIGIN_S || self.age < MIN_AGE_S {
+        if self.origin_age < ORIGIN_S || self.age < if self.quick_origin { QUICK_ORIGIN_S } else { MIN_AGE_S } {
             return;
         }
         let jump: [f64; 3] = core::array::from_fn(|a| d[a] - p[a]);
@@ -570,5 +588,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy, origin, origin_age, at_origin, ms_step });
+    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy, origin, origin_age, at_origin, ms_step, quick_origin });
 }
