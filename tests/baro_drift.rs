@@ -80,10 +80,7 @@ fn a_drift_is_judged_against_the_flights_own_gps_altitude_wander() {
 /// `PLATEAU_HELD`): 36 s flagged.
 #[test]
 fn a_baro_error_that_moved_and_held_is_not_judged_as_a_drift_for_long() {
-    let f = Flight::draw(Split::Tune, 1207);
-    assert_eq!(f.faults[0].kind.name(), "step");
-    let r = battery::run(&f, &Config::default()).unwrap();
-    let fp = r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count();
+    let fp = common::false_positives(Split::Tune, 1207, "step");
     assert!(fp <= 400, "{fp} false-positive epochs (826 before)");
 }
 
@@ -95,10 +92,7 @@ fn a_baro_error_that_moved_and_held_is_not_judged_as_a_drift_for_long() {
 /// baro on them (33 s).
 #[test]
 fn a_drift_plateau_after_an_early_baro_step_is_released() {
-    let f = Flight::draw(Split::Tune, 1608);
-    assert_eq!(f.faults[0].kind.name(), "baro-step");
-    let r = battery::run(&f, &Config::default()).unwrap();
-    let fp = r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count();
+    let fp = common::false_positives(Split::Tune, 1608, "baro-step");
     assert!(fp <= 350, "{fp} false-positive epochs (517 before)");
 }
 

@@ -5,6 +5,8 @@
 //! one.
 #![cfg(not(target_arch = "wasm32"))]
 
+mod common;
+
 use navguard::{config::Config, detector::Detector, sim::*};
 
 /// (share of the fault's GPS epochs flagged, flagged GPS epochs in the 30 s
@@ -119,10 +121,6 @@ fn a_step_that_cannot_be_a_drag_off_end_is_judged_past_60_s() {
 /// a return to its origin from 10 s of age (`VelocityTrack::quick`).
 #[test]
 fn the_end_of_a_ramp_from_the_first_seconds_is_its_return() {
-    use navguard::battery::{self, Flight, Split};
-    let f = Flight::draw(Split::Tune, 656);
-    assert_eq!(f.faults[0].kind.name(), "ramp");
-    let r = battery::run(&f, &Config::default()).unwrap();
-    let fp = r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count();
+    let fp = common::false_positives(navguard::battery::Split::Tune, 656, "ramp");
     assert!(fp <= 10, "{fp} false-positive epochs (286 before)");
 }

@@ -23,6 +23,16 @@ pub fn flagged_after_fault(f: &Flight, i: usize, len: f64) -> (usize, usize) {
     (after.iter().filter(|st| **st != 0).count(), after.len())
 }
 
+/// The battery flight `index` of `split`, whose first fault is of kind
+/// `kind`, run with the default config: its false-positive GPS epochs
+/// (flagged, labelled healthy).
+pub fn false_positives(split: battery::Split, index: u64, kind: &str) -> usize {
+    let f = Flight::draw(split, index);
+    assert_eq!(f.faults[0].kind.name(), kind);
+    let r = battery::run(&f, &Config::default()).unwrap();
+    r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count()
+}
+
 /// The bytes of a shared real log, `p` relative to `../shared/data`.
 pub fn data(p: &str) -> Vec<u8> {
     let path = format!("{}/../shared/data/{p}", env!("CARGO_MANIFEST_DIR"));
