@@ -25,7 +25,9 @@
 //! call does not move the window's start into it): the drift is measured
 //! from the level before it, the episode lasts while the baro is off that
 //! level, and its end (the baro back) restarts the window (`window` says
-//! when else it restarts).
+//! when else it restarts). A drift that stopped growing is over too, once
+//! the baro's levels see the baro near them (`PLATEAU_S`): what it holds
+//! is then a level, which the levels judge.
 //!
 //! A GPS vertical drag-off (position and velocity moved together) moves
 //! both levels like a baro drift. Its end tells them apart: the GPS
