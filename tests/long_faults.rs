@@ -124,3 +124,14 @@ fn the_end_of_a_ramp_from_the_first_seconds_is_its_return() {
     let fp = common::false_positives(navguard::battery::Split::Tune, 656, "ramp");
     assert!(fp <= 10, "{fp} false-positive epochs (286 before)");
 }
+
+/// Regression: battery eval #59 (hover, 20 Hz receiver, 50 Hz industrial
+/// IMU with vibration): a 0.35 m/s drag-off for 77 s ended with a 27 m
+/// jump back that was judged as a step for 60 s (1,195 false-positive
+/// epochs). The drag-off's end is confirmed on half-second means of the
+/// velocity at the jump (`dragend`, the short shape).
+#[test]
+fn a_drag_end_under_a_wandering_imu_is_its_return() {
+    let fp = common::false_positives(navguard::battery::Split::Eval, 59, "drag-off");
+    assert!(fp <= 60, "{fp} false-positive epochs (1,195 before)");
+}

@@ -76,8 +76,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// and when it last grew (`DriftTest::peak`, `t_grew`). 24: a drag-off's
 /// end ruled out (`DragEnd::ruled_out`), the episode's long coast
 /// (`Episode::long_coast`), the GPS track's quick origin
-/// (`VelocityTrack::quick_origin`).
-pub const VERSION: u32 = 24;
+/// (`VelocityTrack::quick_origin`). 25: the drag-off's end confirmation's
+/// short shape (`dragend::ShiftRms`, one per shape).
+pub const VERSION: u32 = 25;
 
 #[derive(Clone)]
 struct Header {
