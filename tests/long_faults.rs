@@ -135,3 +135,16 @@ fn a_drag_end_under_a_wandering_imu_is_its_return() {
     let fp = common::false_positives(navguard::battery::Split::Eval, 59, "drag-off");
     assert!(fp <= 60, "{fp} false-positive epochs (1,195 before)");
 }
+
+/// Regression: battery tune #1614 (aggressive, 5 Hz Gauss–Markov receiver,
+/// consumer IMU with vibration): a 0.92 m/s vertical drag-off for 7 s was
+/// blamed on the baro (the GPS altitude and its Doppler integral moved
+/// together), and its 6.5 m return, a position jump inside that episode,
+/// was judged as a vertical step for 56 s (277 false-positive epochs). The
+/// drag-off's end confirmation is now armed when the position is first
+/// withheld inside an episode, not only when an episode opens on it.
+#[test]
+fn a_drag_end_inside_a_baro_episode_is_its_return() {
+    let fp = common::false_positives(navguard::battery::Split::Tune, 1614, "drag-off");
+    assert!(fp <= 30, "{fp} false-positive epochs (277 before)");
+}

@@ -1401,8 +1401,9 @@ impl Consistency {
         h || v
     }
 
-    /// A position episode that opened at this epoch (`opened_on_position`)
-    /// on a jump off the velocity track arms the drag-off's end
+    /// A position episode that opened at this epoch, or an episode whose
+    /// position was first withheld at it (`opened_on_position`), on a jump
+    /// off the velocity track arms the drag-off's end
     /// confirmations, horizontal and vertical (see `dragend`); an episode
     /// that ended, or re-anchored, disarms them.
     #[cfg_attr(navguard_cold_size, optimize(size))]
@@ -2692,9 +2693,16 @@ impl Detector {
             sigma_track: self.consistency.track.sigmas(),
             baro_off: self.consistency.baro_still_off(),
         };
+        let pos_before = self.episode.withheld.gps_pos();
         let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         step.reset |= restart;
-        let opened_on_position = !self.oracle && !was_active && self.episode.withheld.gps_pos();
+        // The position withheld from this epoch on, whether the episode
+        // opened here or on another group: a vertical drag-off is first
+        // blamed on the baro (the GPS altitude and its Doppler integral
+        // move together, the baro leaves both), and its end is the
+        // position's jump inside that episode (battery tune #1614: a 0.92
+        // m/s drag for 7 s whose 6.5 m return was judged as a step for 56 s).
+        let opened_on_position = !self.oracle && (!was_active || !pos_before) && self.episode.withheld.gps_pos();
         self.consistency.arm_drag_end(fix.t, opened_on_position, &step);
         if !step.fault && !step.reset {
             self.consistency.track.learn();
