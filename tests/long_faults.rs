@@ -148,3 +148,14 @@ fn a_drag_end_inside_a_baro_episode_is_its_return() {
     let fp = common::false_positives(navguard::battery::Split::Tune, 1614, "drag-off");
     assert!(fp <= 30, "{fp} false-positive epochs (277 before)");
 }
+
+/// Regression: battery tune #1444 (hover, 2 Hz receiver): an accelerometer
+/// bias of 0.86 m/s² from 10.2 s, before the IMU test armed, was learnt as
+/// the test's baseline rate, and its end at 104.9 s was flagged as an IMU
+/// fault (85 false-positive epochs). The baseline rate is bounded
+/// (`indicators::IMU_MAX_RATE`).
+#[test]
+fn an_accelerometer_bias_from_before_the_imu_test_armed_leaves_no_false_alarm() {
+    let fp = common::false_positives(navguard::battery::Split::Tune, 1444, "accel-bias");
+    assert!(fp <= 10, "{fp} false-positive epochs (85 before)");
+}

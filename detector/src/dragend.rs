@@ -242,17 +242,18 @@ impl DragEnd {
     /// it serves both `confirmed` and `learn` (issue 15's size budget).
     #[inline(never)]
     fn short_shift(&self, t0: f64) -> [f64; 2] {
-        // Per side (after, before): count and sums.
-        let mut acc = [[0.0; 3]; 2];
+        let (mut n, mut a, mut b) = ([0.0; 2], [0.0; 2], [0.0; 2]);
         for (t, z) in &self.recent {
             let dt = t - t0;
-            if dt.abs() < SHORT_S || dt == -SHORT_S {
-                let a = &mut acc[usize::from(dt < 0.0)];
-                *a = [a[0] + 1.0, a[1] + z[0], a[2] + z[1]];
+            if (0.0..SHORT_S).contains(&dt) {
+                n[0] += 1.0;
+                a = [a[0] + z[0], a[1] + z[1]];
+            } else if (-SHORT_S..0.0).contains(&dt) {
+                n[1] += 1.0;
+                b = [b[0] + z[0], b[1] + z[1]];
             }
         }
-        let [a, b] = acc;
-        [a[1] / a[0] - b[1] / b[0], a[2] / a[0] - b[2] / b[0]]
+        [a[0] / n[0] - b[0] / n[1], a[1] / n[0] - b[1] / n[1]]
     }
 
     /// A normal epoch: learn the RMS of the shift a confirmation measures,

@@ -701,6 +701,13 @@ impl<const D: usize> LagTest<D> {
         f64::NAN
     }
 
+    /// Bound the baseline rate's magnitude by `max` (units/s).
+    fn bound_rate(&mut self, max: f64) {
+        for r in &mut self.rate {
+            *r = r.clamp(-max, max);
+        }
+    }
+
     /// Windows learnt from so far.
     pub fn learnt(&self) -> u32 {
         self.learnt
@@ -882,6 +889,9 @@ pub const IMU_ARM_WINDOWS: u32 = 50;
 /// fall for 0.4 s), and with 3 s and a 0.2 s latency allowance at a
 /// take-off (164.6 s); with 6 s at neither.
 const IMU_V_SPAN: f64 = 2.0 * IMU_SPAN;
+/// Bound of the IMU tests' baseline rate, m/s² (see `accept_imu`): 1.5%
+/// of g, the rate a tilt error of 0.9° gives.
+const IMU_MAX_RATE: f64 = 0.15;
 const IMU_V_CAP: usize = 2 * IMU_CAP;
 
 impl IndicatorEngine {
@@ -1220,10 +1230,16 @@ impl IndicatorEngine {
         self.imu_fold = on;
     }
 
-    /// The epoch was normal: learn σ of the IMU consistency.
+    /// The epoch was normal: learn σ of the IMU consistency, and its
+    /// baseline rate, bounded by `IMU_MAX_RATE`: the filter tracks the
+    /// accelerometer's bias, so a healthy `z` keeps little rate, while a
+    /// bias that began before the test armed was learnt whole as the
+    /// baseline, hiding it and flagging its end (battery tune #1444).
     pub fn accept_imu(&mut self) {
         self.imu.accept();
         self.imu_v.accept();
+        self.imu.bound_rate(IMU_MAX_RATE);
+        self.imu_v.bound_rate(IMU_MAX_RATE);
     }
 
     /// Restart the IMU (a prediction without IMU, no GPS velocity) or baro
@@ -1630,6 +1646,24 @@ mod tests {
         assert!(one_axis_as_two(f64::NAN).is_nan());
         // The call is where the IMU test's R meets the ANFIS boundary.
         assert_abs_diff_eq!(IMU_CALL * IMU_R_SCALE, 2.55, epsilon = 1e-12);
+    }
+
+    /// Regression: battery tune #1444 (an accelerometer bias of 0.86 m/s²
+    /// from 10.2 s, before the IMU test armed at 20 s): the test learnt the
+    /// bias's ramp of `z` as its baseline rate, so the bias was no fault to
+    /// it and its end was one (85 false-positive epochs, now none). The
+    /// baseline is bounded by `IMU_MAX_RATE` on both IMU tests.
+    #[test]
+    fn the_imu_tests_baseline_rate_is_bounded() {
+        let mut e = IndicatorEngine::new(settings(10));
+        // 120 s at 5 Hz of `z` ramping at 0.8 m/s² north and down, every
+        // window accepted as normal.
+        for i in 0..600 {
+            let t = i as f64 * 0.2;
+            e.observe_imu(t, [0.8 * t, 0.0, 0.8 * t]);
+            e.accept_imu();
+        }
+        assert_eq!([e.imu.rate[0], e.imu.rate[1], e.imu_v.rate[0]], [IMU_MAX_RATE, 0.0, IMU_MAX_RATE]);
     }
 
     #[test]
