@@ -68,14 +68,16 @@ const MIN_AGE_S: f64 = 5.0;
 /// The short shape's span each side of the jump, s (see the module docs).
 const SHORT_S: f64 = 0.5;
 /// The learnt shift's RMS: prior (counted as `PRIOR_N` shifts), m/s, and
-/// the forgetting factor once learnt.
+/// the forgetting rate once learnt, per second of entries (0.01 per entry
+/// of a 5 Hz receiver, the rate it was tuned at; per entry before session
+/// 15, which made a 20 Hz receiver's horizon four times shorter).
 const SHIFT_SIGMA0: f64 = 0.15;
 const PRIOR_N: f64 = 5.0;
-const ALPHA: f64 = 0.01;
+const ALPHA_PER_S: f64 = 0.05;
 
 /// The learnt RMS of one shape's shift on normal epochs (m/s), winsorised
 /// at 3σ: a running mean from the prior at first (`SHIFT_SIGMA0`, counted
-/// as `PRIOR_N` shifts), then forgetting at `ALPHA`.
+/// as `PRIOR_N` shifts), then forgetting at `alpha` per shift.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ShiftRms {
     /// Mean square, (m/s)², and the shifts learnt from.
@@ -95,12 +97,12 @@ impl ShiftRms {
     }
 
     /// Learn one shift (a NaN, a side with no entry, is skipped).
-    fn learn(&mut self, x: f64) {
+    fn learn(&mut self, x: f64, alpha: f64) {
         if x.is_nan() {
             return;
         }
         self.n += 1.0;
-        let w = (1.0 / (self.n + PRIOR_N)).fmax(ALPHA);
+        let w = (1.0 / (self.n + PRIOR_N)).fmax(alpha);
         self.ms += w * ((x * x).fmin(9.0 * self.ms) - self.ms);
     }
 }
@@ -259,7 +261,7 @@ impl DragEnd {
     /// A normal epoch: learn the RMS of the shift a confirmation measures,
     /// the mean of `z` over the last `AFTER_S` against the `BEFORE_S`
     /// before, per axis (winsorised at 3σ; a running mean from the prior at
-    /// first, then forgetting at `ALPHA`).
+    /// first, then forgetting at `ALPHA_PER_S`).
     pub fn learn(&mut self) {
         let Some(&(tn, _)) = self.recent.last() else { return };
         // After: the last `AFTER_S` with its newest entry, as a confirmation
@@ -275,19 +277,23 @@ impl DragEnd {
             (n >= 2.0).then(|| [s[0] / n, s[1] / n])
         };
         let axes = if self.one_axis { 1 } else { 2 };
+        // Forgetting per second of entries, not per entry: the same
+        // horizon at every receiver rate.
+        let n = self.recent.len();
+        let alpha = if n >= 2 { (ALPHA_PER_S * (tn - self.recent[n - 2].0)).fmin(0.5) } else { 0.5 };
         // The short shape, with its jump's epoch the newest entry at least
         // `SHORT_S` old, so both its sides are full.
         if let Some(&(t0, _)) = self.recent.iter().rev().find(|(t, _)| tn - t >= SHORT_S) {
             let v = self.short_shift(t0);
             for x in &v[..axes] {
-                self.short.learn(*x);
+                self.short.learn(*x, alpha);
             }
         }
         let after = mean(&|age| age <= AFTER_S);
         let before = mean(&|age| age > AFTER_S && age <= AFTER_S + BEFORE_S);
         let (Some(a), Some(b)) = (after, before) else { return };
         for k in 0..axes {
-            self.long.learn(a[k] - b[k]);
+            self.long.learn(a[k] - b[k], alpha);
         }
     }
 
@@ -534,6 +540,32 @@ mod tests {
         let (sv, sh) = ((mv / n).sqrt(), (mh / n).sqrt());
         assert!((sv / expected - 1.0).abs() < 0.2, "vertical σ {sv:.3} against {expected:.3}");
         assert!((sh * 2f64.sqrt() / sv - 1.0).abs() < 0.15, "pooled σ {sh:.3} against {sv:.3}/√2");
+    }
+
+    /// The learnt shift forgets per second, not per entry: over 20 s of
+    /// zero shifts, after 100 s of them, its mean square falls by the same
+    /// factor at 5 and at 20 Hz, exp(−2 · 0.05 · 20) (two axes learn per
+    /// entry). Per entry, 20 Hz forgot in 5 s what 5 Hz forgot in 20.
+    #[test]
+    fn the_shift_forgets_at_the_same_pace_at_every_rate() {
+        let decay = |hz: f64| {
+            let mut d = DragEnd::default();
+            let mut at = |from: usize, to: usize| {
+                for i in from..to {
+                    d.push(i as f64 / hz, Some([0.0, 0.0]));
+                    d.learn();
+                }
+                d.long.ms
+            };
+            let n = (100.0 * hz) as usize;
+            let m100 = at(0, n);
+            at(n, n + (20.0 * hz) as usize) / m100
+        };
+        let expect = (-2.0f64 * ALPHA_PER_S * 20.0).exp();
+        for hz in [5.0, 20.0] {
+            let r = decay(hz);
+            assert!((r / expect - 1.0).abs() < 0.05, "{hz} Hz: {r:.4} against {expect:.4}");
+        }
     }
 
     /// 20 Hz entries along N: a random walk (`rw` m/s per entry, the IMU's

@@ -59,9 +59,10 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // GPS altitude's vertical return, the long coast, the track's quick
 // origin) add 305 B: 306,793 B, 407 B under the goal, 207 B under this
 // guard. Session 15's rules (the short shape for a drag-off's end, the
-// drag end armed inside an episode, the IMU baseline rate's bound) add
-// 430 B, and wasm-opt's --converge on the core takes 293 B off: 306,930 B,
-// 270 B under the goal, 70 B under this guard.
+// drag end armed inside an episode, the IMU baseline rate's bound, the
+// drag end's forgetting per second) add 459 B, and wasm-opt's --converge
+// on the core takes 293 B off: 306,959 B, 241 B under the goal, 41 B
+// under this guard.
 // The budget
 // guards today's size plus 0.5 KB: a
 // change that crosses it must find the bytes elsewhere, or raise it with
