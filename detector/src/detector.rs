@@ -51,6 +51,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::anfis::{inputs, Anfis};
 use crate::config::Config;
+use crate::barojump::{BaroJump, BARO_JUMP_AGREE};
 use crate::drift::{DriftTest, Motion, K_CLIMB, K_DYN};
 use crate::ramp::RampTest;
 use crate::filter::{quat_from_wxyz, FilterError, ImuInput, Innovation, Kf};
@@ -346,10 +347,6 @@ const RAMP_R_SCALE: f64 = 2.8 / crate::ramp::RAMP_Z;
 /// The baro flatline's z-score into the baro group's R, the same way
 /// (`flatline::Z` just above the boundary).
 const FLAT_R_SCALE: f64 = 2.8 / flatline::Z;
-/// A baro jump seen on both levels: they moved by the same amount, within
-/// this share of the jump and within `track::NEAR` times the Doppler level's
-/// σ (the GPS altitude's own noise at that epoch is in the difference).
-const BARO_JUMP_AGREE: f64 = 0.3;
 /// Recovery after a coast: GPS increments agree with the filter's (RMS of
 /// normalised consecutive Δr below this) while the offset is modest...
 const RECOVER_INC: f64 = 2.0;
@@ -948,6 +945,8 @@ struct Consistency {
     /// last GPS epoch (`held_departure`; NaN while a level cannot judge):
     /// read at every baro sample, so computed once per epoch.
     baro_held: f64,
+    /// A baro step held from its jump (see `barojump`).
+    baro_jump: BaroJump,
 }
 
 /// Boot-clock rate estimate. Some autopilot builds stamp samples with a boot
@@ -1230,6 +1229,7 @@ impl Consistency {
             baro_flat: Flatline::default(),
             baro_epoch: None,
             baro_held: f64::NAN,
+            baro_jump: BaroJump::default(),
         }
     }
 
@@ -1282,7 +1282,7 @@ impl Consistency {
     /// there learnt the faulty baro as the new level, and its return was
     /// flagged for up to 120 s (battery tune #131). Returns the baro drift
     /// statistic (see `drift`), NaN when not judged.
-    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64) -> (f64, (f64, f64)) {
+    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64, withheld: bool) -> (f64, (f64, f64)) {
         let vup = v.map_or(f64::NAN, |v| -v[2]);
         let prev = self.baro_epoch.replace((t, self.alt_int, vup));
         let baro = self.last_baro.filter(|(tb, _)| t - tb < 0.5).map(|(_, b)| b);
@@ -1291,6 +1291,7 @@ impl Consistency {
             self.baro_dop_level.clear();
             self.baro_drift.clear();
             self.baro_held = f64::NAN;
+            self.baro_jump.clear();
             return (f64::NAN, (f64::NAN, f64::NAN));
         };
         let dt = (t - pt) * self.rate.scale;
@@ -1306,7 +1307,14 @@ impl Consistency {
         }
         let allow = [K_DYN, K_CLIMB];
         let deps = (self.baro_gps_level.departure_net(allow), self.baro_dop_level.departure_net(allow));
+        // A withheld baro is also held off by the step it jumped (see
+        // `barojump`), which the GPS altitude's noise may hide.
         self.baro_held = held_departure(deps.0, deps.1);
+        if withheld {
+            self.baro_held = self.baro_held.fmax(self.baro_jump.held(&self.baro_dop_level));
+        } else {
+            self.baro_jump.observe(t, &self.baro_gps_level, &self.baro_dop_level);
+        }
         let level_off = !(self.baro_held < PLATEAU_HELD);
         (self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv, level_off), deps)
     }
@@ -1487,7 +1495,7 @@ impl Consistency {
             }
         };
         self.last_gps = fix.vel.map(|v| (t, y, v));
-        let (drift, (to_gps, to_doppler)) = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !e.vel_withheld), fix.epv);
+        let (drift, (to_gps, to_doppler)) = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !e.vel_withheld), fix.epv, e.baro_withheld);
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
             ind.observe_baro_gps(t, b + y[2], fix.vel.as_ref().map_or([f64::NAN; 2], motion_of));
@@ -2560,6 +2568,7 @@ impl Detector {
     #[cfg_attr(navguard_cold_size, optimize(size))]
     #[inline(never)]
     fn baro_revived(&mut self) {
+        self.consistency.baro_jump.block();
         restart_baro(self.kf.as_mut(), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
     }
 
@@ -3508,7 +3517,7 @@ mod codec_impls {
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });
     impl_codec!(ImuNoise { prev, psd, period });
     impl_codec!(LastEstimate { pos, vel, baro_h });
-    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_flat, baro_epoch, baro_held });
+    impl_codec!(Consistency { alt_int, dv_imu, imu_gap, flight_time, last_gps, last_baro, rate, track, baro_gps_level, baro_dop_level, baro_drift, ramp, drag_end, baro_flat, baro_epoch, baro_held, baro_jump });
     impl_codec!(ClockRate { scale, motion, sxy, sxx, start, dv, last, receiver });
     impl_codec!(ReceiverClock { sxx, sxy, syy, pairs, runs, run });
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });

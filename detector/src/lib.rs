@@ -16,6 +16,7 @@
 #![cfg_attr(navguard_cold_size, feature(optimize_attribute))]
 
 pub mod anfis;
+pub mod barojump;
 pub mod codec;
 pub mod config;
 pub mod detector;

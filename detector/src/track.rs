@@ -354,6 +354,19 @@ impl VelocityTrack {
         Some(core::array::from_fn(|a| d[a] - p[a]))
     }
 
+    /// This fix's jump on the first axis, m, when it took `d` further from
+    /// both its baseline and its origin: a departure, not a return.
+    pub fn departing_jump(&self) -> Option<f64> {
+        let (d, p) = (self.d?[0], self.d_prev?[0]);
+        let away = |c: f64| (d - c).abs() > (p - c).abs();
+        (away(self.base[0]) && away(self.origin[0])).then_some(d - p)
+    }
+
+    /// σ of the first axis' epoch-to-epoch change, m (0 until learnt).
+    pub fn step_sigma(&self) -> f64 {
+        self.ms_step[0].sqrt()
+    }
+
     /// How far `d`, its first axis less `moved` m, sits from its learnt
     /// baseline: its σ-normalised distance (the axes combined) over `FAR`,
     /// so 1 at `FAR` σ. NaN until the baseline has lived `MIN_AGE_S`.

@@ -1,0 +1,199 @@
+//! A baro step held from its jump for as long as the baro keeps it.
+//!
+//! A withheld baro is held off while its levels (`track::VelocityTrack`:
+//! the baro against the GPS altitude, and against the GPS vertical
+//! velocity integrated) still see it off: `FAR` σ off the Doppler level
+//! and `NEAR` σ off the GPS altitude. The second is the witness that tells
+//! a baro fault from the end of a GPS vertical drag-off (the Doppler level
+//! keeps what a dragged velocity integrated). But a receiver's altitude
+//! wanders by metres: at 2.5–3 m horizontal σ, `NEAR` σ of the GPS level
+//! is 10–15 m, and a 9–12 m baro step was flagged for its first second and
+//! then passed as normal for a minute (battery tune #1316: 9.2 m for 60 s
+//! under a 10 Hz Gauss–Markov receiver, 11 of 554 epochs flagged; #455,
+//! a 9.9 m step from 28 s for 54 s under a white 3 m receiver, 1 of 544).
+//!
+//! The step's onset shows what the levels' noise hides later: a jump, in
+//! one epoch, of the Doppler level by `FAR` times its own epoch-to-epoch
+//! change (the baro's noise and the integral's; a climb moves the baro and
+//! the integral alike), matched by the GPS level's jump (within `NEAR` σ
+//! of its own epoch-to-epoch change, or `BARO_JUMP_AGREE` of the jump: the
+//! baro moved, not the GPS), and taking both levels further from their
+//! baselines and from where they began (a departure, not a return: the end
+//! of a fault the levels learnt jumps back toward their origin). A drag-off
+//! integrates; it does not jump. A velocity spike moves the Doppler level
+//! alone.
+//!
+//! Such a jump is remembered, with the Doppler level just before it. While
+//! the baro is withheld, it stays off for as long as the Doppler level
+//! still holds at least `KEPT` of the jump, and not more than `2 − KEPT`
+//! of it (a level that went on moving holds a drift or a manoeuvre, not
+//! this step: battery eval #275, a fixed wing's Doppler level drifting
+//! 10 m after a 2.7 m jump). The Doppler level is precise to decimetres
+//! over a minute, so this needs no σ of the GPS altitude at all. A jump
+//! back by most of the remembered one (`track::undoes`) is the step's end
+//! and forgets it.
+//!
+//! The detector usually withholds the baro at the jump's epoch or within
+//! a second, so a jump is kept `WAIT_S` while the baro is still fed, and
+//! longer while the level holds it. A baro that revives from stuck jumps
+//! back onto the truth: that jump is its return (`block`), not a new step.
+use crate::track::{undoes, VelocityTrack, FAR, NEAR};
+use crate::MinMax;
+use serde::{Deserialize, Serialize};
+
+/// Share of the jump the Doppler level must still hold (and at most
+/// `2 − KEPT` of it).
+const KEPT: f64 = 0.5;
+/// Floor of the Doppler level's epoch-to-epoch σ a jump is measured on, m:
+/// a level's first epochs learn a σ of centimetres from one change, and a
+/// take-off's 0.5 m then passed for a jump (battery tune #1171).
+const STEP_FLOOR_M: f64 = 0.3;
+/// A jump waits this long for the baro to be withheld, s.
+const WAIT_S: f64 = 2.0;
+/// A baro jump seen on both levels: they moved by the same amount, within
+/// this share of the jump, or within `NEAR` times the GPS level's
+/// epoch-to-epoch σ here (the detector's `vertical_return` bounds the
+/// difference by the Doppler level's σ: the GPS altitude's own noise at
+/// that epoch is in the difference).
+pub const BARO_JUMP_AGREE: f64 = 0.3;
+
+/// See the module docs.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct BaroJump {
+    /// The remembered jump: its size on the Doppler level m, that level
+    /// just before it m, and when it came (true s).
+    jump: Option<(f64, f64, f64)>,
+    /// The baro revived from stuck: its next jump is its return.
+    blocked: bool,
+}
+
+impl BaroJump {
+    /// The baro revived from stuck (see the module docs).
+    pub fn block(&mut self) {
+        self.blocked = true;
+    }
+
+    /// The levels restarted: nothing they held is left to compare.
+    pub fn clear(&mut self) {
+        self.jump = None;
+    }
+
+    /// Observe the levels at a GPS epoch at `t` s while the baro is fed:
+    /// remember a jump, keep the last one while it waits or holds, or
+    /// forget it.
+    pub fn observe(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack) {
+        let new = if self.blocked || dop.returned() { None } else { jump_of(gps, dop, t) };
+        let undone = match (new, self.jump) {
+            (Some((jn, ..)), Some((j, ..))) => undoes(&[jn, 0.0, 0.0], &[j, 0.0, 0.0], 0.0),
+            _ => false,
+        };
+        let keep = self.jump.is_some_and(|(_, _, tj)| t - tj < WAIT_S) || self.held(dop) > 1.0;
+        if undone {
+            self.jump = None;
+        } else if new.is_some() || self.blocked || !keep {
+            self.jump = new;
+        }
+        self.blocked = false;
+    }
+
+    /// How much of the remembered jump the Doppler level `dop` still
+    /// holds, over `KEPT` (so 1 at `KEPT`); NaN with no jump, or when the
+    /// level holds more than `2 − KEPT` of it.
+    pub fn held(&self, dop: &VelocityTrack) -> f64 {
+        let share = self.jump.map_or(f64::NAN, |(j, d0, _)| (dop.level().unwrap_or(d0) - d0) / j);
+        if share < 2.0 - KEPT { share / KEPT } else { f64::NAN }
+    }
+}
+
+/// This epoch's jump of the baro on both levels (see the module docs): its
+/// size on the Doppler level m, that level before it m, and `t`.
+fn jump_of(gps: &VelocityTrack, dop: &VelocityTrack, t: f64) -> Option<(f64, f64, f64)> {
+    let (jg, jd, d) = (gps.departing_jump()?, dop.departing_jump()?, dop.level()?);
+    let agree = (jd - jg).abs() < (NEAR * gps.step_sigma()).fmax(BARO_JUMP_AGREE * jd.abs());
+    (jd.abs() > FAR * dop.step_sigma().fmax(STEP_FLOOR_M) && agree).then_some((jd, d - jd, t))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two levels fed `n` epochs of 5 Hz hover from epoch `k0`: the GPS
+    /// level's value is the baro offset plus the GPS altitude's noise
+    /// `g(k)`, the Doppler level's the offset plus a small noise `e(k)`.
+    /// Returns `held` at each epoch, the baro counted withheld from the
+    /// jump's epoch on when `withhold`.
+    fn run(levels: &mut (VelocityTrack, VelocityTrack), bj: &mut BaroJump, k0: usize, n: usize, off: &dyn Fn(usize) -> f64, withhold: bool) -> Vec<f64> {
+        let dt = 0.2;
+        let mut rng = crate::rng::Rng::new(7 + k0 as u64);
+        let mut withheld = false;
+        (k0..k0 + n)
+            .map(|k| {
+                let (g, e) = (3.0 * rng.normal(), 0.05 * rng.normal());
+                levels.0.step(dt, [off(k) + g, 0.0, 0.0], [0.0; 3], [0.0; 3]);
+                levels.1.step(dt, [off(k) + e, 0.0, 0.0], [0.0; 3], [0.0; 3]);
+                if !withheld {
+                    bj.observe(k as f64 * dt, &levels.0, &levels.1);
+                    withheld = withhold && bj.jump.is_some();
+                }
+                if !withheld {
+                    levels.0.learn();
+                    levels.1.learn();
+                }
+                bj.held(&levels.1)
+            })
+            .collect()
+    }
+
+    /// A 10 m step under a 3 m noisy GPS altitude is held, by the Doppler
+    /// level, for the whole 60 s (300 epochs) of it, well above 1; with no
+    /// step nothing is remembered; a jump back forgets it.
+    #[test]
+    fn a_step_is_held_until_its_return() {
+        let mut levels = (VelocityTrack::default(), VelocityTrack::default());
+        let mut bj = BaroJump::default();
+        let calm = run(&mut levels, &mut bj, 0, 300, &|_| 0.0, true);
+        assert!(calm.iter().all(|h| h.is_nan()), "a healthy baro remembered a jump");
+        let step = run(&mut levels, &mut bj, 300, 300, &|_| 10.0, true);
+        assert!(step.iter().all(|h| (1.8..2.2).contains(h)), "held {:?}", &step[..5]);
+        // The step's end: the baro jumps back (observed while fed again).
+        let back = run(&mut levels, &mut bj, 600, 5, &|_| 0.0, false);
+        assert!(back.iter().all(|h| h.is_nan()), "the return was kept: {back:?}");
+        assert_eq!(bj.jump, None);
+    }
+
+    /// A baro that revives from stuck jumps back onto the truth: that jump
+    /// is not remembered. Without `block` it is (the test fails).
+    #[test]
+    fn a_revived_baro_is_not_a_new_step() {
+        for (blocked, want) in [(false, true), (true, false)] {
+            let mut levels = (VelocityTrack::default(), VelocityTrack::default());
+            let mut bj = BaroJump::default();
+            run(&mut levels, &mut bj, 0, 300, &|_| 0.0, false);
+            if blocked {
+                bj.block();
+            }
+            run(&mut levels, &mut bj, 300, 1, &|_| 12.0, false);
+            assert_eq!(bj.jump.is_some(), want, "blocked {blocked}");
+        }
+    }
+
+    /// A level that goes on moving past `2 − KEPT` of the jump holds more
+    /// than this step: not held by it.
+    #[test]
+    fn a_level_that_kept_moving_is_not_held_by_the_jump() {
+        let mut levels = (VelocityTrack::default(), VelocityTrack::default());
+        let mut bj = BaroJump::default();
+        run(&mut levels, &mut bj, 0, 300, &|_| 0.0, true);
+        let h = run(&mut levels, &mut bj, 300, 100, &|k| 5.0 + 0.1 * (k - 300) as f64, true);
+        assert!(h[0] > 1.0 && h[4] > 1.0, "{:?}", &h[..5]);
+        assert!(h[99].is_nan(), "a 15 m level held by a 5 m jump: {}", h[99]);
+    }
+}
+
+/// The snapshot codec of this file's state type ([`crate::codec`]).
+mod codec_impls {
+    use super::*;
+    use crate::codec::impl_codec;
+
+    impl_codec!(BaroJump { jump, blocked });
+}
