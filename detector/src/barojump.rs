@@ -15,29 +15,37 @@
 //! The step's onset shows what the levels' noise hides later: a jump, in
 //! one epoch, of the Doppler level by `FAR` times its own epoch-to-epoch
 //! change (the baro's noise and the integral's; a climb moves the baro and
-//! the integral alike), matched by the GPS level's jump (within `NEAR` σ
-//! of its own epoch-to-epoch change, or `BARO_JUMP_AGREE` of the jump: the
-//! baro moved, not the GPS), and taking both levels further from their
-//! baselines and from where they began (a departure, not a return: the end
-//! of a fault the levels learnt jumps back toward their origin). A drag-off
-//! integrates; it does not jump. A velocity spike moves the Doppler level
-//! alone.
+//! the integral alike), matched by the GPS level's jump (within `NEAR`
+//! times its own epoch-to-epoch σ, or `BARO_JUMP_AGREE` of the jump: the
+//! baro moved, not the GPS). A drag-off integrates; it does not jump. A
+//! GPS velocity spike moves the Doppler level alone.
 //!
-//! Such a jump is remembered, with the Doppler level just before it. While
-//! the baro is withheld, it stays off for as long as the Doppler level
-//! still holds at least `KEPT` of the jump, and not more than `2 − KEPT`
-//! of it (a level that went on moving holds a drift or a manoeuvre, not
-//! this step: battery eval #275, a fixed wing's Doppler level drifting
-//! 10 m after a 2.7 m jump). The Doppler level is precise to decimetres
-//! over a minute, so this needs no σ of the GPS altitude at all. A jump
-//! back by most of the remembered one (`track::undoes`) is the step's end
-//! and forgets it.
+//! Such a jump is remembered, with the Doppler level just before it, when
+//! it takes that level further from both its baseline and where it began
+//! (a departure: the end of a fault the level learnt jumps back toward
+//! them). While the baro is withheld, it stays off for as long as the
+//! Doppler level still holds at least `KEPT` of the jump, and not more than
+//! `2 − KEPT` of it (a level that went on moving holds a drift or a
+//! manoeuvre, not this step: battery eval #275, a fixed wing's Doppler
+//! level drifting 10 m after a 2.7 m jump). The Doppler level is precise
+//! to decimetres over a minute, so this needs no σ of the GPS altitude.
 //!
-//! The detector usually withholds the baro at the jump's epoch or within
-//! a second, so a jump is kept `WAIT_S` while the baro is still fed, and
+//! A jump that takes back most of the last one seen (`track::undoes`),
+//! while the level still held that one, is its end: both are forgotten,
+//! so the end of a step is not remembered as a new one (battery eval #142).
+//! The detector usually withholds the baro at the jump's epoch or within a
+//! second, so a jump is kept `WAIT_S` while the baro is still fed, and
 //! longer while the level holds it. A baro that revives from stuck jumps
 //! back onto the truth: that jump is its return (`block`), not a new step.
-use crate::track::{undoes, VelocityTrack, FAR, NEAR};
+//!
+//! While a jump is remembered, the Doppler level integrates the GPS
+//! vertical velocity even when the detector withheld it (see the
+//! detector's `baro_levels`): the baro's jump moved the filter's climb
+//! before the baro was withheld, the GPS velocity then disagreed with the
+//! filter, and the filter's climb, integrated instead, took the jump into
+//! the level within seconds (battery tune #1617: a 13.6 m step, its
+//! Doppler level back to a quarter of it 3 s later; #628).
+use crate::track::{undoes, VelocityTrack, FAR, NEAR, RELEARN_S};
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
@@ -63,6 +71,9 @@ pub struct BaroJump {
     /// The remembered jump: its size on the Doppler level m, that level
     /// just before it m, and when it came (true s).
     jump: Option<(f64, f64, f64)>,
+    /// The last jump seen on both levels, departing or not: its size m
+    /// and the Doppler level just before it m.
+    last: Option<(f64, f64)>,
     /// The baro revived from stuck: its next jump is its return.
     blocked: bool,
 }
@@ -76,41 +87,57 @@ impl BaroJump {
     /// The levels restarted: nothing they held is left to compare.
     pub fn clear(&mut self) {
         self.jump = None;
+        self.last = None;
     }
 
     /// Observe the levels at a GPS epoch at `t` s while the baro is fed:
     /// remember a jump, keep the last one while it waits or holds, or
     /// forget it.
     pub fn observe(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack) {
-        let new = if self.blocked || dop.returned() { None } else { jump_of(gps, dop, t) };
-        let undone = match (new, self.jump) {
-            (Some((jn, ..)), Some((j, ..))) => undoes(&[jn, 0.0, 0.0], &[j, 0.0, 0.0], 0.0),
+        let seen = if self.blocked || dop.returned() { None } else { jump_of(gps, dop) };
+        // A jump that takes back most of the last one while the level
+        // still held it is that one's end, remembered or not.
+        let undone = match (seen, self.last) {
+            (Some((jn, d0, _)), Some((j, dl))) => undoes(&[jn, 0.0, 0.0], &[j, 0.0, 0.0], 0.0) && (d0 - dl) / j > KEPT,
             _ => false,
         };
-        let keep = self.jump.is_some_and(|(_, _, tj)| t - tj < WAIT_S) || self.held(dop) > 1.0;
+        let keep = !self.blocked && (self.jump.is_some_and(|(_, _, tj)| t - tj < WAIT_S) || self.held(t, dop) > 1.0);
         if undone {
+            self.last = None;
             self.jump = None;
-        } else if new.is_some() || self.blocked || !keep {
-            self.jump = new;
+        } else if let Some((j, d0, departing)) = seen {
+            self.last = Some((j, d0));
+            if departing {
+                self.jump = Some((j, d0, t));
+            } else if !keep {
+                self.jump = None;
+            }
+        } else if !keep {
+            self.jump = None;
         }
         self.blocked = false;
+    }
+
+    /// A jump is remembered.
+    pub fn remembered(&self) -> bool {
+        self.jump.is_some()
     }
 
     /// How much of the remembered jump the Doppler level `dop` still
     /// holds, over `KEPT` (so 1 at `KEPT`); NaN with no jump, or when the
     /// level holds more than `2 − KEPT` of it.
-    pub fn held(&self, dop: &VelocityTrack) -> f64 {
-        let share = self.jump.map_or(f64::NAN, |(j, d0, _)| (dop.level().unwrap_or(d0) - d0) / j);
+    pub fn held(&self, t: f64, dop: &VelocityTrack) -> f64 {
+        let share = self.jump.filter(|(_, _, tj)| t - tj < RELEARN_S).map_or(f64::NAN, |(j, d0, _)| (dop.level().unwrap_or(d0) - d0) / j);
         if share < 2.0 - KEPT { share / KEPT } else { f64::NAN }
     }
 }
 
 /// This epoch's jump of the baro on both levels (see the module docs): its
 /// size on the Doppler level m, that level before it m, and `t`.
-fn jump_of(gps: &VelocityTrack, dop: &VelocityTrack, t: f64) -> Option<(f64, f64, f64)> {
-    let (jg, jd, d) = (gps.departing_jump()?, dop.departing_jump()?, dop.level()?);
+fn jump_of(gps: &VelocityTrack, dop: &VelocityTrack) -> Option<(f64, f64, bool)> {
+    let (jg, jd, d) = (gps.jump()?[0], dop.jump()?[0], dop.level()?);
     let agree = (jd - jg).abs() < (NEAR * gps.step_sigma()).fmax(BARO_JUMP_AGREE * jd.abs());
-    (jd.abs() > FAR * dop.step_sigma().fmax(STEP_FLOOR_M) && agree).then_some((jd, d - jd, t))
+    (jd.abs() > FAR * dop.step_sigma().fmax(STEP_FLOOR_M) && agree).then(|| (jd, d - jd, dop.departing_jump().is_some()))
 }
 
 #[cfg(test)]
@@ -139,7 +166,7 @@ mod tests {
                     levels.0.learn();
                     levels.1.learn();
                 }
-                bj.held(&levels.1)
+                bj.held(k as f64 * dt, &levels.1)
             })
             .collect()
     }
@@ -195,5 +222,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(BaroJump { jump, blocked });
+    impl_codec!(BaroJump { jump, last, blocked });
 }

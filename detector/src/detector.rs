@@ -1272,17 +1272,22 @@ impl Consistency {
     }
 
     /// The baro's levels at a GPS epoch at `t` (position `y` NED m, GPS
-    /// velocity `v` when it is trusted, vertical accuracy claim `epv` m),
-    /// with the latest baro sample. The
+    /// velocity `v`, which the detector withheld when `vel_withheld`,
+    /// vertical accuracy claim `epv` m; the baro is withheld when
+    /// `withheld`), with the latest baro sample. The
     /// level against the GPS altitude needs no velocity. The level against
     /// the vertical velocity integrates the GPS velocity while it is
     /// trusted, and the filter's own (IMU-coasted) vertical velocity while
     /// it is withheld, so a baro fault met during a GPS episode is still
     /// judged against the level learnt before it: restarting the levels
     /// there learnt the faulty baro as the new level, and its return was
-    /// flagged for up to 120 s (battery tune #131). Returns the baro drift
-    /// statistic (see `drift`), NaN when not judged.
-    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, epv: f64, withheld: bool) -> (f64, (f64, f64)) {
+    /// flagged for up to 120 s (battery tune #131). A withheld velocity is
+    /// still integrated while the baro is withheld or a baro jump is
+    /// remembered (see `barojump`): the filter's climb then holds the
+    /// jump the baro fed it. Returns the baro drift statistic (see
+    /// `drift`), NaN when not judged.
+    fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, vel_withheld: bool, epv: f64, withheld: bool) -> (f64, (f64, f64)) {
+        let v = v.filter(|_| !vel_withheld || withheld || self.baro_jump.remembered());
         let vup = v.map_or(f64::NAN, |v| -v[2]);
         let prev = self.baro_epoch.replace((t, self.alt_int, vup));
         let baro = self.last_baro.filter(|(tb, _)| t - tb < 0.5).map(|(_, b)| b);
@@ -1311,7 +1316,7 @@ impl Consistency {
         // `barojump`), which the GPS altitude's noise may hide.
         self.baro_held = held_departure(deps.0, deps.1);
         if withheld {
-            self.baro_held = self.baro_held.fmax(self.baro_jump.held(&self.baro_dop_level));
+            self.baro_held = self.baro_held.fmax(self.baro_jump.held(t, &self.baro_dop_level));
         } else {
             self.baro_jump.observe(t, &self.baro_gps_level, &self.baro_dop_level);
         }
@@ -1362,6 +1367,10 @@ impl Consistency {
     /// receiver, flagged for its first 8 s). The Doppler level alone is no
     /// witness: it keeps the offset a vertical drag-off integrated, long
     /// after the GPS altitude came back onto the baro (tune #1292, #1486).
+    ///
+    /// `baro_held` is also at least the share of the baro's jump that its
+    /// Doppler level still holds (`barojump`), 1 at half of it: the GPS
+    /// altitude's noise may hide a step that its jump showed.
     fn baro_still_off(&self) -> bool {
         self.baro_held > 1.0
     }
@@ -1495,7 +1504,7 @@ impl Consistency {
             }
         };
         self.last_gps = fix.vel.map(|v| (t, y, v));
-        let (drift, (to_gps, to_doppler)) = self.baro_levels(t, &y, fix.vel.as_ref().filter(|_| !e.vel_withheld), fix.epv, e.baro_withheld);
+        let (drift, (to_gps, to_doppler)) = self.baro_levels(t, &y, fix.vel.as_ref(), e.vel_withheld, fix.epv, e.baro_withheld);
         // Baro against the GPS altitude (up), with the latest baro sample.
         if let Some((_, b)) = self.last_baro.filter(|(tb, _)| t - tb < 0.5) {
             ind.observe_baro_gps(t, b + y[2], fix.vel.as_ref().map_or([f64::NAN; 2], motion_of));
@@ -1749,6 +1758,18 @@ impl Withheld {
         self.baro_calm = 0;
     }
 
+    /// `release`, but a withheld baro still off its levels or its jump
+    /// (`baro_off`, see `Consistency::baro_still_off`) stays withheld: the
+    /// end of a GPS episode, or the filter re-anchored on the GPS, does not
+    /// end the baro's fault (battery tune #1608: a 12 m step held by its
+    /// jump was released when a GPS return ended the episode 22 s in, and
+    /// its end, 27 s later, was judged as a drift for 50 s).
+    fn release_unless_baro_off(&mut self, baro_off: bool) {
+        let baro = baro_off && self.baro();
+        self.release();
+        self.groups[2] = baro;
+    }
+
     /// A baro sample with consistency `cons` (see `indicators`): a withheld
     /// baro that follows the filter's climb again for a few samples is
     /// released. Returns whether it was released on this sample.
@@ -1941,7 +1962,7 @@ impl Episode {
     fn step(&mut self, t: f64, fault: bool, ev: &Evidence, max_coast: f64, oracle: bool) -> EpisodeStep {
         if !fault {
             self.ended_off_track(ev);
-            self.normal_epoch();
+            self.normal_epoch(ev.baro_off);
             return EpisodeStep { fault: false, reset: false };
         }
         let start = *self.coast_start.get_or_insert(t);
@@ -2060,11 +2081,11 @@ impl Episode {
     }
 
     /// A normal GPS verdict.
-    fn normal_epoch(&mut self) {
+    fn normal_epoch(&mut self, baro_off: bool) {
         self.calm_epochs = 0;
         self.coast_start = None;
         self.long_coast = false;
-        self.withheld.release();
+        self.withheld.release_unless_baro_off(baro_off);
         // A single normal verdict inside a coast does not end it: the
         // filter's offset is still the coast's until the GPS has been
         // accepted for a few epochs.
@@ -2077,11 +2098,11 @@ impl Episode {
     /// The filter was re-anchored on GPS: nothing coasts any more.
     #[cfg_attr(navguard_cold_size, optimize(size))]
     #[inline(never)]
-    fn reanchored(&mut self) {
+    fn reanchored(&mut self, baro_off: bool) {
         self.coast_start = None;
         self.calm_epochs = 0;
         self.long_coast = false;
-        self.withheld.release();
+        self.withheld.release_unless_baro_off(baro_off);
         self.receiver_lost = false;
     }
 }
@@ -2765,7 +2786,7 @@ impl Detector {
     #[inline(never)]
     fn reanchored(&mut self) {
         self.stats.filter_resets += 1;
-        self.episode.reanchored();
+        self.episode.reanchored(self.consistency.baro_still_off());
         self.ind.reset_references();
         self.last_est.baro_h = None;
         self.methods.prev_nu = None;

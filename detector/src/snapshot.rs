@@ -77,8 +77,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// end ruled out (`DragEnd::ruled_out`), the episode's long coast
 /// (`Episode::long_coast`), the GPS track's quick origin
 /// (`VelocityTrack::quick_origin`). 25: the drag-off's end confirmation's
-/// short shape (`dragend::ShiftRms`, one per shape).
-pub const VERSION: u32 = 25;
+/// short shape (`dragend::ShiftRms`, one per shape). 26: the baro's
+/// jump remembered (`barojump::BaroJump`).
+pub const VERSION: u32 = 26;
 
 #[derive(Clone)]
 struct Header {

@@ -40,7 +40,7 @@ pub const NEAR: f64 = 2.5;
 /// Outlying this long, the baseline is re-learnt from the current `d`, s:
 /// a receiver whose track moved for good (a re-acquisition) is not judged
 /// against its old one for the rest of the flight.
-const RELEARN_S: f64 = 120.0;
+pub const RELEARN_S: f64 = 120.0;
 /// Span of the track's first learnt epochs whose mean is its origin, s.
 const ORIGIN_S: f64 = 5.0;
 /// Age from which a quick track judges a return to its origin, s (see
