@@ -38,6 +38,15 @@
 //! longer while the level holds it. A baro that revives from stuck jumps
 //! back onto the truth: that jump is its return (`block`), not a new step.
 //!
+//! A jump holds for at most `track::RELEARN_S` (120 s), the time after
+//! which a level re-learns an outlying baseline as the sensor's new one:
+//! the end of a fault the levels learnt (one from the flight's first
+//! seconds, or one whose onset was lost) jumps away from them like an
+//! onset and is held like one (battery tune #1046, #855, #775: 170–600
+//! false-positive epochs each), and the cap bounds what such a hold
+//! costs. The detector keeps a baro that is still off withheld when a GPS
+//! episode ends or the filter re-anchors (`Withheld::release_unless_baro_off`).
+//!
 //! While a jump is remembered, the Doppler level integrates the GPS
 //! vertical velocity even when the detector withheld it (see the
 //! detector's `baro_levels`): the baro's jump moved the filter's climb
@@ -76,6 +85,9 @@ pub struct BaroJump {
     last: Option<(f64, f64)>,
     /// The baro revived from stuck: its next jump is its return.
     blocked: bool,
+    /// The last epoch judged while the baro was withheld jumped back by
+    /// most of the remembered jump: the step's end (`withheld_epoch`).
+    ended: bool,
 }
 
 impl BaroJump {
@@ -116,6 +128,29 @@ impl BaroJump {
             self.jump = None;
         }
         self.blocked = false;
+        self.ended = false;
+    }
+
+    /// Observe the levels at a GPS epoch while the baro is withheld: a
+    /// jump that takes back most of the remembered one, while the level
+    /// still held it, is the step's end (`ended`), and both jumps are
+    /// forgotten. The levels cannot tell it when the step held them from
+    /// learning for their first 30 s (battery tune #270: a 12.2 m step
+    /// from 8 s to 107 s, held to its end, whose return was then in the
+    /// baro's 6 s windows for 32 epochs).
+    pub fn withheld_epoch(&mut self, gps: &VelocityTrack, dop: &VelocityTrack) {
+        self.ended = match (jump_of(gps, dop), self.jump) {
+            (Some((jn, d0, _)), Some((j, dj, _))) => undoes(&[jn, 0.0, 0.0], &[j, 0.0, 0.0], 0.0) && (d0 - dj) / j > KEPT,
+            _ => false,
+        };
+        if self.ended {
+            self.clear();
+        }
+    }
+
+    /// The last epoch judged while the baro was withheld was the step's end.
+    pub fn ended(&self) -> bool {
+        self.ended
     }
 
     /// A jump is remembered.
@@ -204,6 +239,17 @@ mod tests {
         }
     }
 
+    /// A step longer than `RELEARN_S` is held for that long, then no more.
+    #[test]
+    fn a_jump_holds_for_at_most_relearn_s() {
+        let mut levels = (VelocityTrack::default(), VelocityTrack::default());
+        let mut bj = BaroJump::default();
+        run(&mut levels, &mut bj, 0, 300, &|_| 0.0, true);
+        let h = run(&mut levels, &mut bj, 300, 650, &|_| 10.0, true);
+        // 5 Hz: epoch 595 is 119 s after the jump, 605 is 121 s.
+        assert!(h[595] > 1.8 && h[605].is_nan(), "{} {}", h[595], h[605]);
+    }
+
     /// A level that goes on moving past `2 − KEPT` of the jump holds more
     /// than this step: not held by it.
     #[test]
@@ -222,5 +268,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(BaroJump { jump, last, blocked });
+    impl_codec!(BaroJump { jump, last, blocked, ended });
 }

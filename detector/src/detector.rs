@@ -1316,6 +1316,7 @@ impl Consistency {
         // `barojump`), which the GPS altitude's noise may hide.
         self.baro_held = held_departure(deps.0, deps.1);
         if withheld {
+            self.baro_jump.withheld_epoch(&self.baro_gps_level, &self.baro_dop_level);
             self.baro_held = self.baro_held.fmax(self.baro_jump.held(t, &self.baro_dop_level));
         } else {
             self.baro_jump.observe(t, &self.baro_gps_level, &self.baro_dop_level);
@@ -1386,8 +1387,12 @@ impl Consistency {
     /// no position fault and kept what a dragged velocity integrated, did
     /// not move (a GPS vertical step's or drag-off's end: tune #1427, a
     /// 0.41 m/s drag for 26 s from 13.7 s, whose 11 m return was judged as
-    /// a step for 60 s).
+    /// a step for 60 s). The baro's, too, when it jumped back by most of
+    /// the jump that held it (`BaroJump::ended`).
     fn vertical_return(&self) -> Option<bool> {
+        if self.baro_jump.ended() {
+            return Some(true);
+        }
         if !self.baro_gps_level.returned() {
             return None;
         }
@@ -2080,7 +2085,8 @@ impl Episode {
         !oracle && !self.imu && self.calm_epochs >= RECOVER_EPOCHS && elapsed > 0.5
     }
 
-    /// A normal GPS verdict.
+    /// A normal GPS verdict; `baro_off`: the baro is still off (see
+    /// `Withheld::release_unless_baro_off`).
     fn normal_epoch(&mut self, baro_off: bool) {
         self.calm_epochs = 0;
         self.coast_start = None;
@@ -2098,6 +2104,7 @@ impl Episode {
     /// The filter was re-anchored on GPS: nothing coasts any more.
     #[cfg_attr(navguard_cold_size, optimize(size))]
     #[inline(never)]
+    /// `baro_off`: the baro is still off (see `Withheld::release_unless_baro_off`).
     fn reanchored(&mut self, baro_off: bool) {
         self.coast_start = None;
         self.calm_epochs = 0;
