@@ -30,9 +30,10 @@
 //! level drifting 10 m after a 2.7 m jump). The Doppler level is precise
 //! to decimetres over a minute, so this needs no σ of the GPS altitude.
 //!
-//! A jump that takes back most of the last one seen (`track::undoes`),
-//! while the level still held that one, is its end: both are forgotten,
-//! so the end of a step is not remembered as a new one (battery eval #142).
+//! A jump that takes back most of the remembered one (within
+//! `track::RETURN_UNDONE` of it), while the level still held it, is its
+//! end: it is forgotten, so the end of a step is not remembered as a new
+//! one; while the baro is withheld, it is the baro's return (`ended`).
 //! The detector usually withholds the baro at the jump's epoch or within a
 //! second, so a jump is kept `WAIT_S` while the baro is still fed, and
 //! longer while the level holds it. A baro that revives from stuck jumps
@@ -54,7 +55,7 @@
 //! filter, and the filter's climb, integrated instead, took the jump into
 //! the level within seconds (battery tune #1617: a 13.6 m step, its
 //! Doppler level back to a quarter of it 3 s later; #628).
-use crate::track::{undoes, VelocityTrack, FAR, NEAR, RELEARN_S};
+use crate::track::{VelocityTrack, FAR, NEAR, RELEARN_S, RETURN_UNDONE};
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
@@ -80,13 +81,10 @@ pub struct BaroJump {
     /// The remembered jump: its size on the Doppler level m, that level
     /// just before it m, and when it came (true s).
     jump: Option<(f64, f64, f64)>,
-    /// The last jump seen on both levels, departing or not: its size m
-    /// and the Doppler level just before it m.
-    last: Option<(f64, f64)>,
     /// The baro revived from stuck: its next jump is its return.
     blocked: bool,
     /// The last epoch judged while the baro was withheld jumped back by
-    /// most of the remembered jump: the step's end (`withheld_epoch`).
+    /// most of the remembered jump: the step's end (`epoch`).
     ended: bool,
 }
 
@@ -99,52 +97,41 @@ impl BaroJump {
     /// The levels restarted: nothing they held is left to compare.
     pub fn clear(&mut self) {
         self.jump = None;
-        self.last = None;
     }
 
-    /// Observe the levels at a GPS epoch at `t` s while the baro is fed:
+    /// Observe the levels at a GPS epoch at `t` s. While the baro is fed:
     /// remember a jump, keep the last one while it waits or holds, or
-    /// forget it.
-    pub fn observe(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack) {
-        let seen = if self.blocked || dop.returned() { None } else { jump_of(gps, dop) };
-        // A jump that takes back most of the last one while the level
-        // still held it is that one's end, remembered or not.
-        let undone = match (seen, self.last) {
-            (Some((jn, d0, _)), Some((j, dl))) => undoes(&[jn, 0.0, 0.0], &[j, 0.0, 0.0], 0.0) && (d0 - dl) / j > KEPT,
+    /// forget it. A jump that takes back most of the remembered one, while
+    /// the level still held it, is its end; while
+    /// the baro is `withheld`, it is the step's end (`ended`): the levels
+    /// cannot tell it when the step held them from learning for their
+    /// first 30 s (battery tune #270: a 12.2 m step from 8 s to 107 s, held
+    /// to its end, whose return was then in the baro's 6 s windows for 32
+    /// epochs).
+    pub fn epoch(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack, withheld: bool) {
+        let seen = if self.blocked { None } else { jump_of(gps, dop) };
+        let undone = match (seen, self.jump) {
+            (Some((jn, d0, _)), Some((j, dl, _))) => {
+                let undo = -jn / j;
+                undo >= RETURN_UNDONE.0 && undo <= RETURN_UNDONE.1 && (d0 - dl) / j > KEPT
+            }
             _ => false,
         };
-        let keep = !self.blocked && (self.jump.is_some_and(|(_, _, tj)| t - tj < WAIT_S) || self.held(t, dop) > 1.0);
+        self.ended = withheld && undone;
         if undone {
-            self.last = None;
-            self.jump = None;
-        } else if let Some((j, d0, departing)) = seen {
-            self.last = Some((j, d0));
-            if departing {
-                self.jump = Some((j, d0, t));
+            self.clear();
+        } else if !withheld {
+            let keep = !self.blocked && (self.jump.is_some_and(|(_, _, tj)| t - tj < WAIT_S) || self.held(t, dop) > 1.0);
+            if let Some((j, d0, departing)) = seen {
+                if departing {
+                    self.jump = Some((j, d0, t));
+                } else if !keep {
+                    self.jump = None;
+                }
             } else if !keep {
                 self.jump = None;
             }
-        } else if !keep {
-            self.jump = None;
-        }
-        self.blocked = false;
-        self.ended = false;
-    }
-
-    /// Observe the levels at a GPS epoch while the baro is withheld: a
-    /// jump that takes back most of the remembered one, while the level
-    /// still held it, is the step's end (`ended`), and both jumps are
-    /// forgotten. The levels cannot tell it when the step held them from
-    /// learning for their first 30 s (battery tune #270: a 12.2 m step
-    /// from 8 s to 107 s, held to its end, whose return was then in the
-    /// baro's 6 s windows for 32 epochs).
-    pub fn withheld_epoch(&mut self, gps: &VelocityTrack, dop: &VelocityTrack) {
-        self.ended = match (jump_of(gps, dop), self.jump) {
-            (Some((jn, d0, _)), Some((j, dj, _))) => undoes(&[jn, 0.0, 0.0], &[j, 0.0, 0.0], 0.0) && (d0 - dj) / j > KEPT,
-            _ => false,
-        };
-        if self.ended {
-            self.clear();
+            self.blocked = false;
         }
     }
 
@@ -161,6 +148,7 @@ impl BaroJump {
     /// How much of the remembered jump the Doppler level `dop` still
     /// holds, over `KEPT` (so 1 at `KEPT`); NaN with no jump, or when the
     /// level holds more than `2 − KEPT` of it.
+    #[inline(never)]
     pub fn held(&self, t: f64, dop: &VelocityTrack) -> f64 {
         let share = self.jump.filter(|(_, _, tj)| t - tj < RELEARN_S).map_or(f64::NAN, |(j, d0, _)| (dop.level().unwrap_or(d0) - d0) / j);
         if share < 2.0 - KEPT { share / KEPT } else { f64::NAN }
@@ -170,9 +158,9 @@ impl BaroJump {
 /// This epoch's jump of the baro on both levels (see the module docs): its
 /// size on the Doppler level m, that level before it m, and `t`.
 fn jump_of(gps: &VelocityTrack, dop: &VelocityTrack) -> Option<(f64, f64, bool)> {
-    let (jg, jd, d) = (gps.jump()?[0], dop.jump()?[0], dop.level()?);
+    let ((jg, ..), (jd, d0, departs)) = (gps.jump_on_first_axis()?, dop.jump_on_first_axis()?);
     let agree = (jd - jg).abs() < (NEAR * gps.step_sigma()).fmax(BARO_JUMP_AGREE * jd.abs());
-    (jd.abs() > FAR * dop.step_sigma().fmax(STEP_FLOOR_M) && agree).then(|| (jd, d - jd, dop.departing_jump().is_some()))
+    (jd.abs() > FAR * dop.step_sigma().fmax(STEP_FLOOR_M) && agree).then_some((jd, d0, departs))
 }
 
 #[cfg(test)]
@@ -193,10 +181,8 @@ mod tests {
                 let (g, e) = (3.0 * rng.normal(), 0.05 * rng.normal());
                 levels.0.step(dt, [off(k) + g, 0.0, 0.0], [0.0; 3], [0.0; 3]);
                 levels.1.step(dt, [off(k) + e, 0.0, 0.0], [0.0; 3], [0.0; 3]);
-                if !withheld {
-                    bj.observe(k as f64 * dt, &levels.0, &levels.1);
-                    withheld = withhold && bj.jump.is_some();
-                }
+                bj.epoch(k as f64 * dt, &levels.0, &levels.1, withheld);
+                withheld |= withhold && bj.jump.is_some();
                 if !withheld {
                     levels.0.learn();
                     levels.1.learn();
@@ -268,5 +254,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(BaroJump { jump, last, blocked, ended });
+    impl_codec!(BaroJump { jump, blocked, ended });
 }

@@ -1315,11 +1315,9 @@ impl Consistency {
         // A withheld baro is also held off by the step it jumped (see
         // `barojump`), which the GPS altitude's noise may hide.
         self.baro_held = held_departure(deps.0, deps.1);
+        self.baro_jump.epoch(t, &self.baro_gps_level, &self.baro_dop_level, withheld);
         if withheld {
-            self.baro_jump.withheld_epoch(&self.baro_gps_level, &self.baro_dop_level);
             self.baro_held = self.baro_held.fmax(self.baro_jump.held(t, &self.baro_dop_level));
-        } else {
-            self.baro_jump.observe(t, &self.baro_gps_level, &self.baro_dop_level);
         }
         let level_off = !(self.baro_held < PLATEAU_HELD);
         (self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv, level_off), deps)
@@ -1457,6 +1455,7 @@ impl Consistency {
     /// the epoch's indicators, given what the epoch already knows (`e`).
     /// Also returns whether the GPS altitude came back onto both its other
     /// references at this fix (see `altitude_vote`).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn tests(&mut self, ind: &mut IndicatorEngine, fix: &Fix, e: EpochState) -> (Indicators, bool) {
         let (t, y) = (fix.t, fix.y);
         // The receiver's own time, when the log has it, measures the clock
@@ -1964,6 +1963,7 @@ impl Episode {
     /// fault epoch withholds what departed and may end the episode by
     /// re-anchoring (past `max_coast` s, or recovered); a normal one
     /// releases every group.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn step(&mut self, t: f64, fault: bool, ev: &Evidence, max_coast: f64, oracle: bool) -> EpisodeStep {
         if !fault {
             self.ended_off_track(ev);
@@ -2624,6 +2624,7 @@ impl Detector {
     /// verdict), episode (its start and IMU part), gating (what the filter
     /// is not fed) and the episode's end, filter update (or re-anchoring),
     /// learning (databases, retraining, reference windows).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn gps_epoch(&mut self, s: &Sample) -> Output {
         self.stats.gps_epochs += 1;
         self.clock.fix(s.t);

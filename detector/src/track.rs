@@ -354,12 +354,13 @@ impl VelocityTrack {
         Some(core::array::from_fn(|a| d[a] - p[a]))
     }
 
-    /// This fix's jump on the first axis, m, when it took `d` further from
-    /// both its baseline and its origin: a departure, not a return.
-    pub fn departing_jump(&self) -> Option<f64> {
+    /// This fix's jump on the first axis, m, `d` there before it, m, and
+    /// whether it took `d` further from both its baseline and its origin (a
+    /// departure, not a return). None before two fixes.
+    pub fn jump_on_first_axis(&self) -> Option<(f64, f64, bool)> {
         let (d, p) = (self.d?[0], self.d_prev?[0]);
         let away = |c: f64| (d - c).abs() > (p - c).abs();
-        (away(self.base[0]) && away(self.origin[0])).then_some(d - p)
+        Some((d - p, p, away(self.base[0]) && away(self.origin[0])))
     }
 
     /// σ of the first axis' epoch-to-epoch change, m (0 until learnt).

@@ -62,13 +62,20 @@ const LAB_WASM = statSync(join(pkg, 'navguard_lab_bg.wasm')).size;
 // drag end armed inside an episode, the IMU baseline rate's bound, the
 // drag end's forgetting per second) add 459 B, and wasm-opt's --converge
 // on the core takes 293 B off: 306,959 B, 241 B under the goal, 41 B
-// under this guard.
+// under this guard. Session 16's baro jump hold (`barojump`, the baro kept
+// withheld while still off) adds 1,043 B, and three per-GPS-epoch stages
+// built for size (`Detector::gps_epoch`, `Consistency::tests`,
+// `Episode::step`: #[optimize(size)]) take 976 B off: 307,026 B, 174 B
+// under the goal. The guard is raised to the goal (307,200 B), with the
+// reason: the size-for-speed trade that remains (the rest of the per-epoch
+// consistency code, 13–15% of `pushColumns`, README) is a worse one than
+// this rule's missed baro steps.
 // The budget
 // guards today's size plus 0.5 KB: a
 // change that crosses it must find the bytes elsewhere, or raise it with
 // the reason, never past the goal, which the last test asserts.
 const FIRST_USE_GOAL = 307_200;
-const CORE_WASM_BUDGET = 307_000;
+const CORE_WASM_BUDGET = 307_200;
 const { chromium } = createRequire(import.meta.url)(join(root, 'node_modules', 'playwright-core'));
 
 let work, project, browser;
