@@ -99,15 +99,15 @@ impl BaroJump {
         self.jump = None;
     }
 
-    /// Observe the levels at a GPS epoch at `t` s. While the baro is fed:
-    /// remember a jump, keep the last one while it waits or holds, or
-    /// forget it. A jump that takes back most of the remembered one, while
-    /// the level still held it, is its end; while
-    /// the baro is `withheld`, it is the step's end (`ended`): the levels
-    /// cannot tell it when the step held them from learning for their
-    /// first 30 s (battery tune #270: a 12.2 m step from 8 s to 107 s, held
-    /// to its end, whose return was then in the baro's 6 s windows for 32
-    /// epochs).
+    /// Observe the levels at a GPS epoch at `t` s. A jump that takes back
+    /// most of the remembered one, while the level still held it, is its
+    /// end, and it is forgotten; while the baro is `withheld`, that is the
+    /// baro's return (`ended`), which the levels cannot tell when the step
+    /// held them from learning for their first 30 s (battery tune #270: a
+    /// 12.2 m step from 8 s to 107 s, held to its end, whose return was
+    /// then in the baro's 6 s windows for 32 epochs). While the baro is
+    /// fed: remember a departing jump, keep the last one while it waits or
+    /// holds, or forget it.
     pub fn epoch(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack, withheld: bool) {
         let seen = if self.blocked { None } else { jump_of(gps, dop) };
         let undone = match (seen, self.jump) {
@@ -146,8 +146,9 @@ impl BaroJump {
     }
 
     /// How much of the remembered jump the Doppler level `dop` still
-    /// holds, over `KEPT` (so 1 at `KEPT`); NaN with no jump, or when the
-    /// level holds more than `2 − KEPT` of it.
+    /// holds at `t` s, over `KEPT` (so 1 at `KEPT`); NaN with no jump,
+    /// `RELEARN_S` after it, or when the level holds more than `2 − KEPT`
+    /// of it.
     #[inline(never)]
     pub fn held(&self, t: f64, dop: &VelocityTrack) -> f64 {
         let share = self.jump.filter(|(_, _, tj)| t - tj < RELEARN_S).map_or(f64::NAN, |(j, d0, _)| (dop.level().unwrap_or(d0) - d0) / j);
@@ -156,7 +157,8 @@ impl BaroJump {
 }
 
 /// This epoch's jump of the baro on both levels (see the module docs): its
-/// size on the Doppler level m, that level before it m, and `t`.
+/// size on the Doppler level m, that level before it m, and whether it
+/// departs from the level's baseline and origin.
 fn jump_of(gps: &VelocityTrack, dop: &VelocityTrack) -> Option<(f64, f64, bool)> {
     let ((jg, ..), (jd, d0, departs)) = (gps.jump_on_first_axis()?, dop.jump_on_first_axis()?);
     let agree = (jd - jg).abs() < (NEAR * gps.step_sigma()).fmax(BARO_JUMP_AGREE * jd.abs());

@@ -2102,9 +2102,9 @@ impl Episode {
     }
 
     /// The filter was re-anchored on GPS: nothing coasts any more.
+    /// `baro_off`: the baro is still off (see `Withheld::release_unless_baro_off`).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     #[inline(never)]
-    /// `baro_off`: the baro is still off (see `Withheld::release_unless_baro_off`).
     fn reanchored(&mut self, baro_off: bool) {
         self.coast_start = None;
         self.calm_epochs = 0;
