@@ -341,6 +341,11 @@ const DRIFT_R_SCALE: f64 = 2.8 / crate::drift::DRIFT_Z;
 /// baro step the levels still see (battery eval #27: 12.7 m for 79 s,
 /// held at about 1).
 const PLATEAU_HELD: f64 = 0.5;
+/// The fix's jump off its velocity track (`VelocityTrack::departed`, 1 at
+/// `track::FAR` σ) into the position group's R: `FAR` σ sits just above
+/// the boundary, and above `GATE`, so the position is withheld from the
+/// jump's own fix on.
+const TRACK_R_SCALE: f64 = 2.8;
 /// The position ramp statistic's scale into the position group's R, the
 /// same way (`ramp::RAMP_Z` just above the boundary).
 const RAMP_R_SCALE: f64 = 2.8 / crate::ramp::RAMP_Z;
@@ -1533,6 +1538,15 @@ impl Consistency {
         let mut out = ind.close_epoch();
         // The position ramping off its velocity track (see `ramp`).
         out.fold(0, ramp * RAMP_R_SCALE);
+        // The fix jumping off its velocity track from on it (see
+        // `VelocityTrack::departed`): a step's first fixes scored just under
+        // the boundary fed the filter, which then followed the step (the
+        // 10 m step check's instance 3: 7 of 299 epochs flagged; tune
+        // #1644: a 17.6 m step, 517 epochs missed). Not across a fix the
+        // receiver calls degraded, like the ramp test.
+        if !e.declared {
+            out.fold(0, self.track.departed() * TRACK_R_SCALE);
+        }
         // The baro's level: condemned only when it left both references
         // (NaN, not judged, unless both are); and its drift over a long
         // window, against both (see `drift`).

@@ -146,7 +146,10 @@ pub fn chi2(inn: &EpochInnovations) -> Decision {
     Decision { score: worst / N_ALPHA_HALF, failed }
 }
 
-/// Whole-vector chi-square test (normalised innovation squared).
+/// Whole-vector chi-square test (normalised innovation squared). Built for
+/// size in the core module: the default ANFIS never calls it, and its bytes
+/// pay for the track departure's (issue 15's budget).
+#[cfg_attr(navguard_cold_size, optimize(size))]
 pub fn nis(inn: &EpochInnovations) -> Decision {
     let m = inn.m;
     let q = if m == 6 {
@@ -345,7 +348,9 @@ pub struct PoolState {
 }
 
 impl PoolState {
-    /// Decide one epoch at horizontal speed `speed` (m/s).
+    /// Decide one epoch at horizontal speed `speed` (m/s). Built for size in
+    /// the core module, like `nis`.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn decide(&mut self, inn: &EpochInnovations, speed: f64) -> Decision {
         let (grp, g) = inn.gamma().fold((0, 0.0), |b, x| if x.1 > b.1 { x } else { b });
         let mode = self.bands.mode_of(speed).unwrap_or(0);

@@ -12,7 +12,10 @@
 //! not learnt, so a fault never becomes the baseline). What the detector
 //! asks it: did this epoch's jump bring `d` back inside its wander from far
 //! outside it? That is the end of a position fault that was never flagged
-//! (a slow ramp the filter followed), not the start of a new one.
+//! (a slow ramp the filter followed), not the start of a new one. And its
+//! mirror (session 17, `departed`): did this epoch's jump take `d` from
+//! inside its wander to far outside it? That is a position fault's onset,
+//! folded into the position group's R whatever the filter's residuals say.
 //!
 //! The detector also uses it on one axis (the others fed zeros, which stay
 //! at zero departure) for the baro's level: against the GPS altitude (no
@@ -381,6 +384,19 @@ impl VelocityTrack {
         }
     }
 
+    /// This fix's jump took `d` from within `NEAR` σ of its baseline to
+    /// beyond `FAR` σ (the onset of a position fault, the mirror of
+    /// `returned`): how far it sits now, over `FAR` σ; NaN otherwise.
+    pub fn departed(&self) -> f64 {
+        match (self.d, self.d_prev) {
+            (Some(_), Some(p)) if self.age >= MIN_AGE_S && self.z(&p) < NEAR => {
+                let x = self.departure_by(0.0);
+                if x >= 1.0 { x } else { f64::NAN }
+            }
+            _ => f64::NAN,
+        }
+    }
+
     /// `d − base` on axis `a` (m) at this fix and at the previous one, and
     /// σ of that axis (m). None until the baseline has lived `MIN_AGE_S`.
     pub fn offset(&self, a: usize) -> Option<(f64, f64, f64)> {
@@ -465,6 +481,44 @@ mod tests {
             [w[0], w[1] + 10.0, w[2]]
         };
         assert!(!run(&mut tr, 1100, 300, &step).iter().any(|r| *r));
+    }
+
+    /// A jump from on the track to beyond `FAR` σ off it is a departure
+    /// at that fix only; a ramp that walks off never jumps, and a return
+    /// (from far off to on) is none.
+    #[test]
+    fn a_jump_off_the_track_is_a_departure_at_that_fix() {
+        let wander = |t: f64| [0.8 * (t / 13.0).sin(), 0.8 * (t / 17.0).cos(), 1.5 * (t / 11.0).sin()];
+        let mut tr = VelocityTrack::default();
+        let dep = |tr: &mut VelocityTrack, t: f64, x: [f64; 3]| {
+            tr.step(0.1, x, [0.0; 3], [0.0; 3]);
+            tr.departed()
+        };
+        // Before the baseline has lived `MIN_AGE_S`, nothing is judged.
+        assert!(dep(&mut tr, 0.0, [20.0, 0.0, 0.0]).is_nan());
+        let mut tr = VelocityTrack::default();
+        run(&mut tr, 0, 600, &wander);
+        // A 10 m step east: its first fix departs, by its σ-distance over
+        // `FAR`; the fixes after it are already off, so none of them.
+        let w = wander(60.0);
+        let first = dep(&mut tr, 60.0, [w[0], w[1] + 10.0, w[2]]);
+        let sigma = tr.sigmas();
+        let d = tr.d().unwrap();
+        let z = ((d[0] - tr.base[0]) / sigma[0]).hypot((d[1] - tr.base[1]) / sigma[1]).hypot((d[2] - tr.base[2]) / sigma[2]);
+        assert!(first > 1.0 && (first - z / FAR).abs() < 1e-9, "{first:.3} against {:.3}", z / FAR);
+        let w = wander(60.1);
+        assert!(dep(&mut tr, 60.1, [w[0], w[1] + 10.0, w[2]]).is_nan());
+        // Back on the track: a return, not a departure.
+        let w = wander(60.2);
+        assert!(dep(&mut tr, 60.2, w).is_nan());
+        // A 0.5 m/s ramp north for 40 s: never a jump off the track.
+        let mut tr = VelocityTrack::default();
+        run(&mut tr, 0, 600, &wander);
+        for i in 0..400 {
+            let t = 60.0 + i as f64 * 0.1;
+            let w = wander(t);
+            assert!(dep(&mut tr, t, [w[0] + 0.5 * (t - 60.0), w[1], w[2]]).is_nan(), "at {t:.1} s");
+        }
     }
 
     /// A one-axis baro level whose healthy error follows the speed²
