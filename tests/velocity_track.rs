@@ -136,3 +136,20 @@ fn a_baro_step_met_in_a_gps_episode_is_judged_against_the_level_before_it() {
     let n = flagged_after(&f, 60.0);
     assert!(n <= 12, "{n} epochs flagged in the 60 s after the step (1 Hz; was 60)");
 }
+
+/// Regression: eval #56 (fixed wing, 10 Hz Gauss–Markov receiver σ 1.0 m,
+/// vibrating consumer IMU): the GPS track learnt its σ in a calm first
+/// minute (vertical 1.4 m) and then judged every fix of a wider wander an
+/// outlier, so neither its baseline nor its σ learnt again. A 0.48 m/s
+/// horizontal ramp's end, the fix back on the truth, was then no return
+/// from far off the track, and was flagged as a step for the 60 s coast
+/// limit (625 false-positive epochs on the flight). The track now learns σ
+/// from outlying fixes too, winsorised at 3σ.
+#[test]
+fn a_ramps_end_on_a_receiver_that_outgrew_its_calm_start_opens_no_interval() {
+    let f = Flight::draw(Split::Eval, 56);
+    assert_eq!(f.faults[1].kind.name(), "ramp");
+    let (n, of) = common::flagged_after_fault(&f, 1, 60.0);
+    assert!(of >= 550 && n <= 20, "{n} of {of} epochs flagged in the 60 s after the ramp");
+    assert!(common::false_positives(Split::Eval, 56, "drag-off") <= 30);
+}

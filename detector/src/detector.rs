@@ -1627,7 +1627,9 @@ impl Methods {
     }
 
     /// Another method's decision on the same innovations (see `methods`)
-    /// and Δr per group; nothing to build for the default ANFIS.
+    /// and Δr per group; nothing to build for the default ANFIS. Built for
+    /// size in the core module: the default never needs its work.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn other_method(&mut self, method: Method, kf: &Kf, res: &Residuals) -> (Option<Decision>, [[f64; 3]; 2]) {
         let baro = self.baro_inn.take();
         if method == Method::Anfis {

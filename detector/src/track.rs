@@ -9,7 +9,8 @@
 //!
 //! The track keeps a slow baseline of `d` and a σ of `d`'s wander about
 //! it, both learnt in flight from normal epochs within 3σ (outliers are
-//! not learnt, so a fault never becomes the baseline). What the detector
+//! not learnt, so a fault never becomes the baseline; since session 17
+//! the GPS position's track learns σ from them too, winsorised at 3σ). What the detector
 //! asks it: did this epoch's jump bring `d` back inside its wander from far
 //! outside it? That is the end of a position fault that was never flagged
 //! (a slow ramp the filter followed), not the start of a new one. And its
@@ -221,7 +222,9 @@ impl VelocityTrack {
     }
 
     /// A normal epoch: learn the baseline and σ from it if it lies within
-    /// `LEARN_SIGMAS` (fast start over the first `TAU_S`).
+    /// `LEARN_SIGMAS` (fast start over the first `TAU_S`). Not inlined:
+    /// three tracks call it (issue 15's size budget).
+    #[inline(never)]
     pub fn learn(&mut self) {
         let Some(d) = self.d else { return };
         let dt = self.dt;
@@ -229,23 +232,42 @@ impl VelocityTrack {
             return;
         }
         let inside = (0..3).all(|a| (d[a] - self.base[a]).abs() <= LEARN_SIGMAS * self.sigma(a));
-        if !inside && self.age >= MIN_AGE_S && self.outlying < RELEARN_S {
+        let outlier = !inside && self.age >= MIN_AGE_S && self.outlying < RELEARN_S;
+        // The GPS position's track learns σ from an outlier too,
+        // winsorised at `LEARN_SIGMAS` σ (never the baseline): a σ learnt
+        // in a calm first minute otherwise made every fix of a wider wander
+        // an outlier for good, and a ramp's end was no return from far off
+        // (battery eval #56: 625 false-positive epochs). Not a baro level's:
+        // its outliers are the baro's faults, which its σ must not learn.
+        if outlier {
             self.outlying += dt;
-            return;
-        }
-        if self.outlying >= RELEARN_S {
-            self.base = d;
-            self.motion_base = self.motion;
-        }
-        self.outlying = 0.0;
-        if self.origin_age < ORIGIN_S {
-            let wo = dt / (self.origin_age + dt);
-            for a in 0..3 {
-                self.origin[a] += wo * (d[a] - self.origin[a]);
+            if !self.quick_origin {
+                return;
             }
-            self.origin_age += dt;
+        } else {
+            if self.outlying >= RELEARN_S {
+                self.base = d;
+                self.motion_base = self.motion;
+            }
+            self.outlying = 0.0;
+            if self.origin_age < ORIGIN_S {
+                let wo = dt / (self.origin_age + dt);
+                for a in 0..3 {
+                    self.origin[a] += wo * (d[a] - self.origin[a]);
+                }
+                self.origin_age += dt;
+            }
         }
         let w = (dt / TAU_S).fmax(dt / (self.age + dt)).fmin(1.0);
+        let (wb, cap) = if outlier { (0.0, LEARN_SIGMAS * LEARN_SIGMAS) } else { (w, f64::INFINITY) };
+        for a in 0..3 {
+            let e = d[a] - self.base[a];
+            self.base[a] += wb * e;
+            self.ms[a] += w * ((e * e).fmin(cap * self.ms[a].fmax(SIGMA_FLOOR_M * SIGMA_FLOOR_M)) - self.ms[a]);
+        }
+        if outlier {
+            return;
+        }
         self.age += dt;
         if let Some(p) = self.d_prev {
             for a in 0..3 {
@@ -253,11 +275,6 @@ impl VelocityTrack {
                 let m = self.ms_step[a];
                 self.ms_step[a] = if m > 0.0 { m + w * (s2.fmin(9.0 * m) - m) } else { s2 };
             }
-        }
-        for a in 0..3 {
-            let e = d[a] - self.base[a];
-            self.base[a] += w * e;
-            self.ms[a] += w * (e * e - self.ms[a]);
         }
         let x = self.deviation();
         if x.iter().all(|v| v.is_finite()) {
@@ -481,6 +498,34 @@ mod tests {
             [w[0], w[1] + 10.0, w[2]]
         };
         assert!(!run(&mut tr, 1100, 300, &step).iter().any(|r| *r));
+    }
+
+    /// The GPS position's track (`quick`) learns σ from outlying fixes
+    /// too, winsorised at `LEARN_SIGMAS` σ, so a receiver whose wander
+    /// outgrows the σ of a calm start is not judged on that σ for good;
+    /// the baseline still does not learn them, and a baro level keeps its
+    /// σ (its outliers are the baro's faults).
+    #[test]
+    fn the_gps_track_outgrows_the_sigma_of_a_calm_start() {
+        let calm = |t: f64| [0.1 * (t / 1.3).sin(), 0.1 * (t / 1.7).cos(), 0.1 * (t / 1.1).sin()];
+        let wide = |t: f64| {
+            let c = calm(t);
+            [c[0], c[1], c[2] + 3.0 * (t / 7.0).sin()]
+        };
+        for (quick, grows) in [(true, true), (false, false)] {
+            let mut tr = if quick { VelocityTrack::quick() } else { VelocityTrack::default() };
+            run(&mut tr, 0, 600, &calm);
+            let (s0, base0) = (tr.sigmas()[2], tr.base[2]);
+            assert!(s0 < 0.35, "calm σ {s0:.2}");
+            run(&mut tr, 600, 600, &wide);
+            let s1 = tr.sigmas()[2];
+            assert_eq!(s1 > 3.0 * s0, grows, "quick {quick}: σ {s0:.2} -> {s1:.2}");
+            if !grows {
+                assert_eq!(s1, s0);
+            }
+            // The outlying fixes moved no baseline.
+            assert!((tr.base[2] - base0).abs() < 0.5, "base {base0:.2} -> {:.2}", tr.base[2]);
+        }
     }
 
     /// A jump from on the track to beyond `FAR` σ off it is a departure
