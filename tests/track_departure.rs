@@ -12,6 +12,14 @@ use common::flagged_after;
 use navguard::battery::{self, Flight, Split};
 use navguard::Config;
 
+/// The share of the flight's first fault flagged, and the epochs flagged
+/// in the 20 s after it, of how many.
+fn held(f: &Flight) -> (f64, usize, usize) {
+    let r = battery::run(f, &Config::default()).unwrap();
+    let (n, of) = flagged_after(f, 20.0);
+    (r.events[0].share, n, of)
+}
+
 /// Regression: instance 3 of the 10 m, 60 s step check (hover, 5 Hz white
 /// receiver σ 0.6 m, tactical IMU). The step's first fixes scored R 2.3–2.5
 /// and fed the filter; 7 of its 299 epochs were flagged.
@@ -19,9 +27,8 @@ use navguard::Config;
 fn a_step_whose_first_fixes_scored_low_is_held_from_its_jump() {
     let f = battery::CHECKS[0].flight(0, 3);
     assert_eq!((f.faults[0].kind.name(), f.faults[0].magnitude), ("step", 10.0));
-    let r = battery::run(&f, &Config::default()).unwrap();
-    assert!(r.events[0].share >= 0.95, "{:.0}% of the step flagged", 100.0 * r.events[0].share);
-    let (n, of) = flagged_after(&f, 20.0);
+    let (share, n, of) = held(&f);
+    assert!(share >= 0.95, "{:.0}% of the step flagged", 100.0 * share);
     assert!(of >= 90 && n <= 2, "{n} of {of} epochs flagged in the 20 s after the step");
 }
 
@@ -33,8 +40,7 @@ fn a_step_whose_first_fixes_scored_low_is_held_from_its_jump() {
 fn a_long_step_under_a_slow_boot_clock_is_held_from_its_jump() {
     let f = Flight::draw(Split::Tune, 1644);
     assert_eq!(f.faults[0].kind.name(), "step");
-    let r = battery::run(&f, &Config::default()).unwrap();
-    assert!(r.events[0].share >= 0.95, "{:.0}% of the step flagged", 100.0 * r.events[0].share);
-    let (n, of) = flagged_after(&f, 20.0);
+    let (share, n, of) = held(&f);
+    assert!(share >= 0.95, "{:.0}% of the step flagged", 100.0 * share);
     assert!(of >= 150 && n <= 30, "{n} of {of} epochs flagged in the 20 s after the step");
 }

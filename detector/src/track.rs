@@ -10,13 +10,14 @@
 //! The track keeps a slow baseline of `d` and a σ of `d`'s wander about
 //! it, both learnt in flight from normal epochs within 3σ (outliers are
 //! not learnt, so a fault never becomes the baseline; since session 17
-//! the GPS position's track learns σ from them too, winsorised at 3σ). What the detector
-//! asks it: did this epoch's jump bring `d` back inside its wander from far
-//! outside it? That is the end of a position fault that was never flagged
-//! (a slow ramp the filter followed), not the start of a new one. And its
-//! mirror (session 17, `departed`): did this epoch's jump take `d` from
-//! inside its wander to far outside it? That is a position fault's onset,
-//! folded into the position group's R whatever the filter's residuals say.
+//! the GPS position's track learns σ from them too, winsorised at 3σ).
+//! What the detector asks it: did this epoch's jump bring `d` back inside
+//! its wander from far outside it? That is the end of a position fault
+//! that was never flagged (a slow ramp the filter followed), not the start
+//! of a new one. And its mirror (session 17, `departed`): did this epoch's
+//! jump take `d` from inside its wander to far outside it? That is a
+//! position fault's onset, folded into the position group's R whatever the
+//! filter's residuals say.
 //!
 //! The detector also uses it on one axis (the others fed zeros, which stay
 //! at zero departure) for the baro's level: against the GPS altitude (no
@@ -523,7 +524,8 @@ mod tests {
             if !grows {
                 assert_eq!(s1, s0);
             }
-            // The outlying fixes moved no baseline.
+            // Only the fixes within 3σ taught the baseline, near the
+            // wander's zero crossings.
             assert!((tr.base[2] - base0).abs() < 0.5, "base {base0:.2} -> {:.2}", tr.base[2]);
         }
     }
@@ -540,7 +542,8 @@ mod tests {
             tr.departed()
         };
         // Before the baseline has lived `MIN_AGE_S`, nothing is judged.
-        assert!(dep(&mut tr, 0.0, [20.0, 0.0, 0.0]).is_nan());
+        run(&mut tr, 0, 100, &wander);
+        assert!(dep(&mut tr, 10.0, [20.0, 0.0, 0.0]).is_nan());
         let mut tr = VelocityTrack::default();
         run(&mut tr, 0, 600, &wander);
         // A 10 m step east: its first fix departs, by its σ-distance over
