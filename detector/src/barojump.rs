@@ -112,6 +112,8 @@ impl BaroJump {
         let seen = if self.blocked { None } else { jump_of(gps, dop) };
         let undone = match (seen, self.jump) {
             (Some((jn, d0, _)), Some((j, dl, _))) => {
+                // `track::undoes` on one axis, written out: calling it
+                // costs 33 B of core (issue 15's budget).
                 let undo = -jn / j;
                 undo >= RETURN_UNDONE.0 && undo <= RETURN_UNDONE.1 && (d0 - dl) / j > KEPT
             }
