@@ -172,6 +172,7 @@ impl DriftTest {
     /// accuracy claim `claim_v` (m, NaN when none). Returns the drift
     /// statistic (see the module docs); NaN while the window spans less
     /// than `SPAN_S`.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn push(&mut self, dt: f64, level: [f64; 2], motion: Motion, claim_v: f64, level_off: bool) -> f64 {
         self.last = [f64::NAN; 2];
         self.pending = None;

@@ -496,6 +496,7 @@ impl Kf {
 
     /// One scalar update `y = hᵀx + e`, `e ~ N(0, r)`, Joseph form, with the
     /// sparse `h` given as (state index, coefficient) pairs.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn scalar_update(&mut self, h: &[(usize, f64)], y: f64, r: f64) -> Result<(), FilterError> {
         self.flush()?;
         if !y.is_finite() {

@@ -1100,6 +1100,7 @@ impl IndicatorEngine {
     /// Feed the position–velocity mismatch `u` of this GPS epoch (per NED
     /// axis: GPS position change minus the trapezoid of the GPS velocities
     /// over the interval, m).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn observe_pv(&mut self, u: [f64; 3], into_sum: bool) {
         let k = self.speed_claim;
         let u = u.map(|x| x / k);

@@ -30,6 +30,22 @@
 //! fix jumps back by at least half of it (`jumped_back`): the position
 //! back on its track from before the ramp, which `returned` reports so the
 //! detector re-anchors on it rather than reading it as a step.
+//!
+//! That slow arm calls a 0.3 m/s ramp some 20 s in: its σ starts from a
+//! 2 m prior and learns over minutes, and the ratio test holds a call
+//! until the ramp has nearly filled the window. So a fast arm
+//! (`fast_stat`) judges the last 6 s: the change between the first and
+//! the last of four 1.5 s box means of the raw `d`, over a σ of such
+//! changes learnt from a fast start (floor 0.25 m horizontal), called at
+//! `FAST_Z` when every step between boxes carries at least `PART_MIN` of
+//! it (a step lies inside one box, so it moves at most two). It is
+//! judged under the slow arm's conditions (settled, no jump in the
+//! window), is not floored at the receiver's position claim (that bounds
+//! the error, not how fast it changes), and a ramp it called is held
+//! while the boxes still move along the called change, or while the slow
+//! arm's statistic holds. Ramp check (eval, 0.3 m/s, 60 s): 0/6 -> 3/6
+//! passed, median first flag 20.1 -> 6.4 s; the three left are receivers
+//! of 1.9-2.6 m noise, where 6 s of a 0.3 m/s ramp is within it.
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
@@ -42,6 +58,23 @@ const SMOOTH_S: f64 = 2.0;
 /// σ prior and floor, horizontal (norm of N, E) and vertical, m.
 const SIGMA0_M: [f64; 2] = [2.0, 3.0];
 const FLOOR_M: [f64; 2] = [1.0, 1.5];
+/// The fast arm's boxes: `BOXES` means of the raw `d`, `BOX_S` true s
+/// each (6 s in all: a 0.3 m/s ramp moves 1.35 m between the first box's
+/// mean and the last's).
+const BOX_S: f64 = 1.5;
+const BOXES: usize = 4;
+/// The fast arm's σ prior and floor, horizontal and vertical, m.
+const FAST_SIGMA0_M: [f64; 2] = [1.0, 1.5];
+const FAST_FLOOR_M: [f64; 2] = [0.25, 0.4];
+/// The fast σ learns with a time constant of the time it has learnt, at
+/// least this, true s, up to `TAU_S`: a fast start, so its prior is gone
+/// within a minute (the slow arm's σ keeps its 2 m prior for minutes).
+const FAST_START_S: f64 = 10.0;
+/// The fast arm's statistic at which it calls.
+const FAST_Z: f64 = 4.0;
+/// Least share of the fast arm's change each step between its boxes
+/// carries (a ramp's carry a third each).
+const PART_MIN: f64 = 0.2;
 /// Statistic at which a ramp is called, and below which it is over.
 pub const RAMP_Z: f64 = 3.0;
 const RELEASE_Z: f64 = 2.0;
@@ -105,6 +138,25 @@ pub struct RampTest {
     /// The test ran before its last `clear`: a restart, which settles
     /// (see `SETTLE_S`); the first start does not.
     restarted: bool,
+    /// The fast arm's learnt mean square of its change (m², as `ms`), its
+    /// last change's size per group, and whether the ramp judged was
+    /// called by it and not by the slow arm.
+    fast_ms: [f64; 2],
+    fast_last: [f64; 2],
+    fast: bool,
+    /// The last `BOXES` box means of the raw `d` (m, NED) with their
+    /// end times (true s, last), oldest first, and the current box's sum
+    /// and count.
+    boxes: Vec<Entry>,
+    acc: [f64; 4],
+    /// The fast arm's change (m, NED) at the last epoch, and at its call.
+    change: [f64; 3],
+    called: [f64; 3],
+}
+
+/// The axes of group `k` (0 horizontal: N, E; 1 vertical: D).
+fn group(k: usize) -> &'static [usize] {
+    if k == 0 { &[0, 1] } else { &[2] }
 }
 
 /// Horizontal norm and vertical magnitude of `b − a`. The norm is a plain
@@ -119,8 +171,8 @@ fn split(a: &[f64; 3], b: &[f64; 3]) -> [f64; 2] {
 impl RampTest {
     /// Restart (the track restarted).
     pub fn clear(&mut self) {
-        let (ms, dev_ms, restarted) = (self.ms, self.dev_ms, self.restarted || self.t > 0.0);
-        *self = RampTest { ms, dev_ms, restarted, ..RampTest::default() };
+        let (ms, fast_ms, dev_ms, restarted) = (self.ms, self.fast_ms, self.dev_ms, self.restarted || self.t > 0.0);
+        *self = RampTest { ms, fast_ms, dev_ms, restarted, ..RampTest::default() };
     }
 
     /// This fix jumped (see `JUMP_Z`) from the smoothed track `before` it
@@ -132,7 +184,7 @@ impl RampTest {
     /// called 27 m into a vertical ramp, back 73 m in one fix).
     fn jumped_back(&self, k: usize, e0: &[f64; 3], before: Option<[f64; 3]>, raw: &[f64; 3]) -> bool {
         let (Some(b), true) = (before, self.jump_t == Some(self.t)) else { return false };
-        let axes: &[usize] = if k == 0 { &[0, 1] } else { &[2] };
+        let axes = group(k);
         let (mut along, mut called2) = (0.0, 0.0);
         for &a in axes {
             let c = b[a] - e0[a];
@@ -155,11 +207,71 @@ impl RampTest {
         if self.claim[k] > s { self.claim[k] } else { s }
     }
 
+    /// σ of the fast arm `k` (as `sigma`).
+    fn fast_sigma(&self, k: usize) -> f64 {
+        sigma_of(self.fast_ms[k], FAST_SIGMA0_M[k], FAST_FLOOR_M[k], f64::NAN) * self.worse.value().fmax(1.0)
+    }
+
+    /// The fast arm: the change of the raw `d` between the first and the
+    /// last of `BOXES` box means, per group, over its σ (scaled so that
+    /// `FAST_Z` reads as `RAMP_Z`); and that statistic again where the
+    /// change is a ramp's (0 elsewhere): each step between boxes carries at
+    /// least `PART_MIN` of it along its direction (a step lies inside one
+    /// box, so it moves at most two steps). Box means, not the smoothed
+    /// track: a smoothing's tail after a step rises like a ramp (battery
+    /// tune #463: an 11 m step under 1.3 m of white noise, no jump against
+    /// that noise). Notes the change in `change`, and its size in
+    /// `fast_last` for learning.
+    fn fast_stat(&mut self) -> [[f64; 2]; 2] {
+        self.fast_last = [f64::NAN; 2];
+        self.change = [0.0; 3];
+        let mut z = [[0.0; 2]; 2];
+        let b = &self.boxes;
+        if b.len() < BOXES || b[BOXES - 1].t - b[0].t > (BOXES as f64) * BOX_S {
+            return z;
+        }
+        self.change = core::array::from_fn(|a| b[BOXES - 1].x[a] - b[0].x[a]);
+        for k in 0..2 {
+            let (mut full2, mut parts) = (0.0, [0.0; BOXES - 1]);
+            for &x in group(k) {
+                let f = self.change[x];
+                full2 += f * f;
+                for (i, p) in parts.iter_mut().enumerate() {
+                    *p += (b[i + 1].x[x] - b[i].x[x]) * f;
+                }
+            }
+            let full = full2.sqrt();
+            let s = self.fast_sigma(k);
+            let linear = parts.iter().all(|p| *p >= PART_MIN * full2);
+            z[0][k] = full / s * (RAMP_Z / FAST_Z);
+            z[1][k] = if linear { z[0][k] } else { 0.0 };
+            self.fast_last[k] = full;
+        }
+        z
+    }
+
+    /// Adds the raw `d` to the current box; a box `BOX_S` long is closed.
+    fn add_to_box(&mut self, raw: &[f64; 3]) {
+        for a in 0..3 {
+            self.acc[a] += raw[a];
+        }
+        self.acc[3] += 1.0;
+        let n = self.acc[3];
+        if self.boxes.last().map_or(self.t >= BOX_S, |l| self.t - l.t >= BOX_S) {
+            if self.boxes.len() == BOXES {
+                self.boxes.remove(0);
+            }
+            self.boxes.push(Entry { t: self.t, x: core::array::from_fn(|a| self.acc[a] / n), ..Entry::default() });
+            self.acc = [0.0; 4];
+        }
+    }
+
     /// One GPS epoch `dt` true s after the last, with the track's `d` (m,
     /// NED), the receiver's claims `eph`, `epv` (m, NaN when none) and how
     /// many times worse than usual it calls its velocity (`worse` ≥ 1, see
     /// `ReceiverQuality`). Returns the ramp statistic (NaN while the
     /// window is short).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn push(&mut self, dt: f64, d: [f64; 3], [eph, epv]: [f64; 2], worse: f64) -> f64 {
         self.last = [f64::NAN; 2];
         self.pending = None;
@@ -188,7 +300,10 @@ impl RampTest {
         }
         let e = Entry { t, x: d, ..Entry::default() };
         self.pending = Some(e);
-        let (Some(e0), r0) = self.window.note(e) else {
+        let (start, r0) = self.window.note(e);
+        self.add_to_box(&raw);
+        let [_, fz] = self.fast_stat();
+        let Some(e0) = start else {
             // No start: too young, or dropped as stale while a fault was
             // judged. A fault judged on it is over (judging would keep the
             // window from ever refilling).
@@ -202,8 +317,15 @@ impl RampTest {
             // The return is one jump: read on this fix, not on the smoothing.
             let k = self.arm.min(1);
             let z_raw = split(&e0.x, &raw)[k] / self.sigma(k);
-            let full = z[k];
-            if full.fmin(z_raw) < RELEASE_Z || self.jumped_back(k, &e0.x, before, &raw) {
+            // A fast call is held while the boxes still move along it.
+            let (mut along, mut c2) = (0.0, 0.0);
+            for &a in group(k) {
+                along += self.change[a] * self.called[a];
+                c2 += self.called[a] * self.called[a];
+            }
+            let fk = if self.fast { along / c2.sqrt().fmax(1e-9) / self.fast_sigma(k) * (RAMP_Z / FAST_Z) } else { 0.0 };
+            let full = z[k].fmax(fk);
+            if full.fmin(z_raw.fmax(fk)) < RELEASE_Z || self.jumped_back(k, &e0.x, before, &raw) {
                 self.judging = false;
                 self.returned = true;
                 self.window.restart();
@@ -219,7 +341,7 @@ impl RampTest {
         // Per group: the recent change (scaled) along the window's change
         // and its size against it.
         let ramp = |k: usize| -> f64 {
-            let axes: &[usize] = if k == 0 { &[0, 1] } else { &[2] };
+            let axes = group(k);
             let (mut full2, mut along, mut rec2) = (0.0, 0.0, 0.0);
             for &a in axes {
                 let (f, r) = (d[a] - e0.x[a], (d[a] - r0.x[a]) * scale);
@@ -244,8 +366,12 @@ impl RampTest {
         // ramp-v misdetection 0.909 -> 0.679, F2 0.713 -> 0.726, clean
         // flights 0.23% unchanged; no shared real log changes).
         let (h, v) = (ramp(0), ramp(1));
+        let slow = h.fmax(v);
+        let (h, v) = (h.fmax(fz[0]), v.fmax(fz[1]));
         let stat = h.fmax(v);
         self.judging = stat >= RAMP_Z;
+        self.fast = slow < RAMP_Z;
+        self.called = self.change;
         self.arm = usize::from(v > h);
         stat
     }
@@ -258,6 +384,7 @@ impl RampTest {
 
     /// The last epoch was normal: its entry enters the window (see
     /// `window::Window::enter`), and σ learns from its change.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn learn(&mut self) {
         let Some(e) = self.pending.take().filter(|_| !self.judging) else { return };
         self.window.enter(e);
@@ -272,12 +399,16 @@ impl RampTest {
         // Learnt raw, as σ_Δ is (see `IndicatorEngine::set_speed_claim`).
         let sigma = [self.sigma(0), self.sigma(1)];
         learn_axes(&mut self.ms, &self.last, sigma, w);
+        let sigma = [self.fast_sigma(0), self.fast_sigma(1)];
+        let w = (self.dt / (self.t - SPAN_S).clamp(FAST_START_S, TAU_S)).fmin(1.0);
+        learn_axes(&mut self.fast_ms, &self.fast_last, sigma, w);
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::window::RECENT_S;
 
     /// Pseudo-random noise in [-a, a] (a fixed LCG: the tests must not
     /// depend on a generator's stream).
@@ -322,8 +453,11 @@ mod tests {
         let mut r = RampTest::default();
         let (s, back) = run(&mut r, 1500, f64::NAN, &ramp);
         let first = s.iter().position(|x| *x >= RAMP_Z).expect("never called");
-        // Called once the window holds about 15 s of it (6 m over σ = 2 m).
-        assert!((110.0..125.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
+        // Called by the fast arm once its four boxes lie on the ramp (2.4 m
+        // over a σ learnt near its floor); the slow arm, whose σ starts
+        // from 2 m, called it 10-25 s in.
+        assert!((104.0..108.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
+        assert!(r.fast_ms[0].sqrt() < 0.3, "fast σ {:.2} m", r.fast_ms[0].sqrt());
         // Held to the end, reported back on the jump's fix, nothing after.
         assert!(s[first..800].iter().all(|x| *x >= RAMP_Z));
         assert_eq!(back, vec![800]);
@@ -332,14 +466,14 @@ mod tests {
 
     #[test]
     fn a_vertical_ramp_is_called_too() {
-        // 0.4 m/s down from 100 s to 160 s, then back: judged on the
-        // vertical σ (prior 3 m), so called later than the horizontal one
-        // (9 m of it, about 22 s in), held, and its return reported.
+        // 0.4 m/s down from 100 s to 160 s, then back: called by the fast
+        // arm as the horizontal one is (the slow arm's vertical σ starts
+        // from 3 m: it called 15-30 s in), held, and its return reported.
         let ramp = |t: f64| if (100.0..160.0).contains(&t) { 0.4 * (t - 100.0) } else { 0.0 };
         let mut r = RampTest::default();
         let (s, back) = run_axis(&mut r, 1500, f64::NAN, 2, &ramp);
         let first = s.iter().position(|x| *x >= RAMP_Z).expect("never called");
-        assert!((115.0..130.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
+        assert!((104.0..108.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
         assert!(s[first..800].iter().all(|x| *x >= RAMP_Z));
         assert_eq!(back, vec![800]);
     }
@@ -347,17 +481,17 @@ mod tests {
     #[test]
     fn a_ramp_called_late_ends_on_its_jump_back() {
         // 0.8 m/s down from 100 s to 160 s, then back in one jump; a 10 m
-        // spike at 110 s keeps the call off until it leaves the window, so
-        // the window's start lies 11 m into the ramp and the jump back
-        // lands 11 m beyond it.
+        // spike at 101 s keeps both arms' call off until it leaves the
+        // window, so the window's start lies some 4 m into the ramp and
+        // the jump back lands that far beyond it.
         let f = |t: f64| {
-            let spike = if (110.0..110.1).contains(&t) { 10.0 } else { 0.0 };
+            let spike = if (101.0..101.1).contains(&t) { 10.0 } else { 0.0 };
             spike + if (100.0..160.0).contains(&t) { 0.8 * (t - 100.0) } else { 0.0 }
         };
         let mut r = RampTest::default();
         let (s, back) = run_axis(&mut r, 1500, f64::NAN, 2, &f);
         let first = s.iter().position(|x| *x >= RAMP_Z).expect("never called");
-        assert!((140.0..150.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
+        assert!((134.0..140.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
         assert_eq!(back, vec![800]);
         assert!(s[801..].iter().all(|x| !(*x >= RAMP_Z)));
     }
@@ -394,10 +528,42 @@ mod tests {
         let first = s.iter().position(|x| *x >= RAMP_Z).expect("never called");
         assert!((30.0..35.0).contains(&(first as f64 * 0.2)), "first call at {} s", first as f64 * 0.2);
         // From 100 s, but with the receiver claiming 10 m: 24 m at most is
-        // 2.4 of its claim.
+        // 2.4 of its claim, so the slow arm never calls. The fast arm does,
+        // as without the claim: the claim bounds the receiver's error, not
+        // how fast it may change (a 6 s change of 2.4 m is 8 of the 0.3 m
+        // this receiver's changes learnt).
         let mut r = RampTest::default();
         let (s, _) = run(&mut r, 1500, 10.0, &|t| if (100.0..160.0).contains(&t) { 0.4 * (t - 100.0) } else { 0.0 });
-        assert!(s.iter().all(|x| !(*x >= RAMP_Z)));
+        let first = s.iter().position(|x| *x >= RAMP_Z).expect("never called");
+        assert!((104.0..108.0).contains(&(first as f64 * 0.2)) && r.fast, "first call at {} s", first as f64 * 0.2);
+        assert!(r.last.iter().all(|l| !(*l >= RAMP_Z * 10.0)));
+    }
+
+    #[test]
+    fn a_step_under_noise_is_not_a_fast_ramp() {
+        // A 10 m step at 100 s that stays, under ±3 m of noise per axis: no
+        // jump against that noise, so only the fast arm's box steps keep it
+        // from being a ramp (battery tune #463: an 11 m step under a 1.3 m
+        // white receiver, called on the smoothed track's tail and held
+        // through the step for 90 s). The slow arm does call it 15 s on,
+        // once the step has left its recent span (a known gap: its ratio
+        // test cannot tell a step older than `RECENT_S` from a ramp's end).
+        let mut r = RampTest::default();
+        let mut calls = vec![];
+        for i in 0..1500 {
+            let t = i as f64 * 0.2;
+            let step = if t >= 100.0 { 10.0 } else { 0.0 };
+            let d = [step + noise(i, 3.0), noise(i + 7, 3.0), noise(i + 13, 3.0)];
+            let s = r.push(0.2, d, [f64::NAN; 2], 1.0);
+            if s >= RAMP_Z {
+                calls.push((t, r.fast));
+            } else {
+                r.learn();
+            }
+        }
+        assert!(r.jump_t.is_none_or(|tj| tj < 100.0), "{:?}", r.jump_t);
+        assert!(calls.iter().all(|&(t, fast)| t >= 100.0 + RECENT_S && !fast), "{:?}", &calls[..calls.len().min(3)]);
+        assert!(r.fast_ms[0].sqrt() < 2.0, "fast σ {:.2} m", r.fast_ms[0].sqrt());
     }
 }
 
@@ -406,5 +572,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, worse, judging, arm, returned, dev_ms, dev, jump_t, restarted });
+    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, worse, judging, arm, returned, dev_ms, dev, jump_t, restarted, fast_ms, fast_last, fast, boxes, acc, change, called });
 }

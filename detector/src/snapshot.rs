@@ -79,7 +79,7 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// (`VelocityTrack::quick_origin`). 25: the drag-off's end confirmation's
 /// short shape (`dragend::ShiftRms`, one per shape). 26: the baro's
 /// jump remembered (`barojump::BaroJump`).
-pub const VERSION: u32 = 26;
+pub const VERSION: u32 = 27;
 
 #[derive(Clone)]
 struct Header {

@@ -125,6 +125,7 @@ impl VelocityTrack {
 
     /// One GPS interval of `dt` true s: position `y` (m) and velocity `v`
     /// at its end, `pv` at its start.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn step(&mut self, dt: f64, y: [f64; 3], v: [f64; 3], pv: [f64; 3]) {
         let Some(_) = self.d else {
             self.integral = y;
@@ -225,6 +226,7 @@ impl VelocityTrack {
     /// A normal epoch: learn the baseline and σ from it if it lies within
     /// `LEARN_SIGMAS` (fast start over the first `TAU_S`). Not inlined:
     /// three tracks call it (issue 15's size budget).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     #[inline(never)]
     pub fn learn(&mut self) {
         let Some(d) = self.d else { return };
@@ -537,7 +539,7 @@ mod tests {
     fn a_jump_off_the_track_is_a_departure_at_that_fix() {
         let wander = |t: f64| [0.8 * (t / 13.0).sin(), 0.8 * (t / 17.0).cos(), 1.5 * (t / 11.0).sin()];
         let mut tr = VelocityTrack::default();
-        let dep = |tr: &mut VelocityTrack, t: f64, x: [f64; 3]| {
+        let dep = |tr: &mut VelocityTrack, _t: f64, x: [f64; 3]| {
             tr.step(0.1, x, [0.0; 3], [0.0; 3]);
             tr.departed()
         };
