@@ -171,7 +171,8 @@ impl DriftTest {
     /// motion (a NaN part: the last one given) and the receiver's vertical
     /// accuracy claim `claim_v` (m, NaN when none). Returns the drift
     /// statistic (see the module docs); NaN while the window spans less
-    /// than `SPAN_S`.
+    /// than `SPAN_S`. Built for size in the core module, like the other
+    /// once-per-GPS-epoch tests (issue 15's budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn push(&mut self, dt: f64, level: [f64; 2], motion: Motion, claim_v: f64, level_off: bool) -> f64 {
         self.last = [f64::NAN; 2];

@@ -1099,7 +1099,8 @@ impl IndicatorEngine {
 
     /// Feed the position–velocity mismatch `u` of this GPS epoch (per NED
     /// axis: GPS position change minus the trapezoid of the GPS velocities
-    /// over the interval, m).
+    /// over the interval, m). Built for size in the core module: once per
+    /// GPS epoch (issue 15's budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn observe_pv(&mut self, u: [f64; 3], into_sum: bool) {
         let k = self.speed_claim;

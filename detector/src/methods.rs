@@ -261,7 +261,9 @@ impl MahaWindow {
         }
     }
 
-    /// Add a normal epoch's Δr.
+    /// Add a normal epoch's Δr. Built for size in the core module, as the
+    /// other methods' per-epoch work is: the default ANFIS never calls it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn push(&mut self, x: [f64; 3]) {
         if !x.iter().all(|v| v.is_finite()) {
             return;
@@ -291,7 +293,9 @@ impl MahaWindow {
 
     /// d² of `x` from the window's mean and covariance (NaN until the window
     /// holds `MAHA_MIN` epochs). A small ridge keeps a degenerate window
-    /// (a receiver that quantises one axis) invertible.
+    /// (a receiver that quantises one axis) invertible. Built for size, like
+    /// `push`.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn d2(&self, x: [f64; 3]) -> f64 {
         if self.len < MAHA_MIN || !x.iter().all(|v| v.is_finite()) {
             return f64::NAN;

@@ -149,14 +149,22 @@ pub struct RampTest {
     /// and count.
     boxes: Vec<Entry>,
     acc: [f64; 4],
-    /// The fast arm's change (m, NED) at the last epoch, and at its call.
-    change: [f64; 3],
+    /// The fast arm's change (m, NED) at the epoch of its last call.
     called: [f64; 3],
 }
 
 /// The axes of group `k` (0 horizontal: N, E; 1 vertical: D).
 fn group(k: usize) -> &'static [usize] {
     if k == 0 { &[0, 1] } else { &[2] }
+}
+
+/// `a · b` over the axes of group `k`.
+fn dot(k: usize, a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    let mut s = 0.0;
+    for &x in group(k) {
+        s += a[x] * b[x];
+    }
+    s
 }
 
 /// Horizontal norm and vertical magnitude of `b − a`. The norm is a plain
@@ -214,40 +222,33 @@ impl RampTest {
 
     /// The fast arm: the change of the raw `d` between the first and the
     /// last of `BOXES` box means, per group, over its σ (scaled so that
-    /// `FAST_Z` reads as `RAMP_Z`); and that statistic again where the
-    /// change is a ramp's (0 elsewhere): each step between boxes carries at
-    /// least `PART_MIN` of it along its direction (a step lies inside one
-    /// box, so it moves at most two steps). Box means, not the smoothed
+    /// `FAST_Z` reads as `RAMP_Z`), where the change is a ramp's (0
+    /// elsewhere): each step between boxes carries at least `PART_MIN` of
+    /// it along its direction (a step lies inside one box, so it moves at
+    /// most two steps). Box means, not the smoothed
     /// track: a smoothing's tail after a step rises like a ramp (battery
     /// tune #463: an 11 m step under 1.3 m of white noise, no jump against
-    /// that noise). Notes the change in `change`, and its size in
-    /// `fast_last` for learning.
-    fn fast_stat(&mut self) -> [[f64; 2]; 2] {
+    /// that noise). Also returns the change (m, NED; 0 without the boxes),
+    /// and notes its size per group in `fast_last` for learning.
+    fn fast_stat(&mut self) -> ([f64; 2], [f64; 3]) {
         self.fast_last = [f64::NAN; 2];
-        self.change = [0.0; 3];
-        let mut z = [[0.0; 2]; 2];
+        let mut z = [0.0; 2];
         let b = &self.boxes;
         if b.len() < BOXES || b[BOXES - 1].t - b[0].t > (BOXES as f64) * BOX_S {
-            return z;
+            return (z, [0.0; 3]);
         }
-        self.change = core::array::from_fn(|a| b[BOXES - 1].x[a] - b[0].x[a]);
+        let change = core::array::from_fn(|a| b[BOXES - 1].x[a] - b[0].x[a]);
         for k in 0..2 {
-            let (mut full2, mut parts) = (0.0, [0.0; BOXES - 1]);
-            for &x in group(k) {
-                let f = self.change[x];
-                full2 += f * f;
-                for (i, p) in parts.iter_mut().enumerate() {
-                    *p += (b[i + 1].x[x] - b[i].x[x]) * f;
-                }
-            }
+            let full2 = dot(k, &change, &change);
             let full = full2.sqrt();
             let s = self.fast_sigma(k);
-            let linear = parts.iter().all(|p| *p >= PART_MIN * full2);
-            z[0][k] = full / s * (RAMP_Z / FAST_Z);
-            z[1][k] = if linear { z[0][k] } else { 0.0 };
+            let linear = b.windows(2).all(|w| dot(k, &core::array::from_fn(|a| w[1].x[a] - w[0].x[a]), &change) >= PART_MIN * full2);
+            if linear {
+                z[k] = full / s * (RAMP_Z / FAST_Z);
+            }
             self.fast_last[k] = full;
         }
-        z
+        (z, change)
     }
 
     /// Adds the raw `d` to the current box; a box `BOX_S` long is closed.
@@ -270,7 +271,8 @@ impl RampTest {
     /// NED), the receiver's claims `eph`, `epv` (m, NaN when none) and how
     /// many times worse than usual it calls its velocity (`worse` ≥ 1, see
     /// `ReceiverQuality`). Returns the ramp statistic (NaN while the
-    /// window is short).
+    /// window is short). Built for size in the core module, with `learn`:
+    /// once per GPS epoch (issue 15's budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn push(&mut self, dt: f64, d: [f64; 3], [eph, epv]: [f64; 2], worse: f64) -> f64 {
         self.last = [f64::NAN; 2];
@@ -302,7 +304,7 @@ impl RampTest {
         self.pending = Some(e);
         let (start, r0) = self.window.note(e);
         self.add_to_box(&raw);
-        let [_, fz] = self.fast_stat();
+        let (fz, change) = self.fast_stat();
         let Some(e0) = start else {
             // No start: too young, or dropped as stale while a fault was
             // judged. A fault judged on it is over (judging would keep the
@@ -318,12 +320,8 @@ impl RampTest {
             let k = self.arm.min(1);
             let z_raw = split(&e0.x, &raw)[k] / self.sigma(k);
             // A fast call is held while the boxes still move along it.
-            let (mut along, mut c2) = (0.0, 0.0);
-            for &a in group(k) {
-                along += self.change[a] * self.called[a];
-                c2 += self.called[a] * self.called[a];
-            }
-            let fk = if self.fast { along / c2.sqrt().fmax(1e-9) / self.fast_sigma(k) * (RAMP_Z / FAST_Z) } else { 0.0 };
+            let c = &self.called;
+            let fk = if self.fast { dot(k, &change, c) / dot(k, c, c).sqrt().fmax(1e-9) / self.fast_sigma(k) * (RAMP_Z / FAST_Z) } else { 0.0 };
             let full = z[k].fmax(fk);
             if full.fmin(z_raw.fmax(fk)) < RELEASE_Z || self.jumped_back(k, &e0.x, before, &raw) {
                 self.judging = false;
@@ -371,7 +369,7 @@ impl RampTest {
         let stat = h.fmax(v);
         self.judging = stat >= RAMP_Z;
         self.fast = slow < RAMP_Z;
-        self.called = self.change;
+        self.called = change;
         self.arm = usize::from(v > h);
         stat
     }
@@ -533,10 +531,23 @@ mod tests {
         // how fast it may change (a 6 s change of 2.4 m is 8 of the 0.3 m
         // this receiver's changes learnt).
         let mut r = RampTest::default();
-        let (s, _) = run(&mut r, 1500, 10.0, &|t| if (100.0..160.0).contains(&t) { 0.4 * (t - 100.0) } else { 0.0 });
-        let first = s.iter().position(|x| *x >= RAMP_Z).expect("never called");
-        assert!((104.0..108.0).contains(&(first as f64 * 0.2)) && r.fast, "first call at {} s", first as f64 * 0.2);
-        assert!(r.last.iter().all(|l| !(*l >= RAMP_Z * 10.0)));
+        let (mut calls, mut slow_max) = (vec![], 0.0f64);
+        for i in 0..1500 {
+            let t = i as f64 * 0.2;
+            let x = if (100.0..160.0).contains(&t) { 0.4 * (t - 100.0) } else { 0.0 };
+            let s = r.push(0.2, [x + noise(i, 0.5), noise(i + 7, 0.5), noise(i + 13, 0.5)], [10.0, f64::NAN], 1.0);
+            if r.last[0].is_finite() {
+                slow_max = slow_max.max(r.last[0] / r.sigma(0));
+            }
+            if s >= RAMP_Z {
+                calls.push((t, r.fast));
+            } else {
+                r.learn();
+            }
+        }
+        let (first, fast) = *calls.first().expect("never called");
+        assert!((104.0..108.0).contains(&first) && fast, "first call at {first} s (fast arm: {fast})");
+        assert!(calls.iter().all(|c| c.1) && slow_max < RAMP_Z, "slow arm's largest statistic {slow_max:.2}");
     }
 
     #[test]
@@ -572,5 +583,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, worse, judging, arm, returned, dev_ms, dev, jump_t, restarted, fast_ms, fast_last, fast, boxes, acc, change, called });
+    impl_codec!(RampTest { t, smooth, window, pending, ms, last, last_span, dt, claim, worse, judging, arm, returned, dev_ms, dev, jump_t, restarted, fast_ms, fast_last, fast, boxes, acc, called });
 }

@@ -924,7 +924,9 @@ impl Evaluator {
         }
     }
 
-    /// Evaluate one residual in operating mode `mode`.
+    /// Evaluate one residual in operating mode `mode`. Built for size in the
+    /// core module: only the `pool` method calls it, never the default ANFIS.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn push(&mut self, residual: f64, mode: usize) -> Result<Verdict, String> {
         if !residual.is_finite() {
             return Err(format!("residual = {}: must be finite", S(residual)));
@@ -1253,6 +1255,7 @@ mod codec_impls {
     /// Externally tagged, as serde numbers it: the variant index, then the
     /// threshold.
     impl Codec for ModeThreshold {
+        #[inline] // see `impl_codec`: compiled where snapshots are taken
         fn encode(&self, w: &mut Vec<u8>) {
             match self {
                 ModeThreshold::Rt(t) => {
@@ -1269,6 +1272,7 @@ mod codec_impls {
                 }
             }
         }
+        #[inline] // see `impl_codec`
         fn decode(r: &mut Reader<'_>) -> Self {
             match r.variant() {
                 1 => ModeThreshold::Kt(Codec::decode(r)),

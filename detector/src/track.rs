@@ -124,7 +124,8 @@ impl VelocityTrack {
     }
 
     /// One GPS interval of `dt` true s: position `y` (m) and velocity `v`
-    /// at its end, `pv` at its start.
+    /// at its end, `pv` at its start. Built for size in the core module:
+    /// once per GPS epoch (issue 15's budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn step(&mut self, dt: f64, y: [f64; 3], v: [f64; 3], pv: [f64; 3]) {
         let Some(_) = self.d else {
@@ -539,35 +540,35 @@ mod tests {
     fn a_jump_off_the_track_is_a_departure_at_that_fix() {
         let wander = |t: f64| [0.8 * (t / 13.0).sin(), 0.8 * (t / 17.0).cos(), 1.5 * (t / 11.0).sin()];
         let mut tr = VelocityTrack::default();
-        let dep = |tr: &mut VelocityTrack, _t: f64, x: [f64; 3]| {
+        let dep = |tr: &mut VelocityTrack, x: [f64; 3]| {
             tr.step(0.1, x, [0.0; 3], [0.0; 3]);
             tr.departed()
         };
         // Before the baseline has lived `MIN_AGE_S`, nothing is judged.
         run(&mut tr, 0, 100, &wander);
-        assert!(dep(&mut tr, 10.0, [20.0, 0.0, 0.0]).is_nan());
+        assert!(dep(&mut tr, [20.0, 0.0, 0.0]).is_nan());
         let mut tr = VelocityTrack::default();
         run(&mut tr, 0, 600, &wander);
         // A 10 m step east: its first fix departs, by its σ-distance over
         // `FAR`; the fixes after it are already off, so none of them.
         let w = wander(60.0);
-        let first = dep(&mut tr, 60.0, [w[0], w[1] + 10.0, w[2]]);
+        let first = dep(&mut tr, [w[0], w[1] + 10.0, w[2]]);
         let sigma = tr.sigmas();
         let d = tr.d().unwrap();
         let z = ((d[0] - tr.base[0]) / sigma[0]).hypot((d[1] - tr.base[1]) / sigma[1]).hypot((d[2] - tr.base[2]) / sigma[2]);
         assert!(first > 1.0 && (first - z / FAR).abs() < 1e-9, "{first:.3} against {:.3}", z / FAR);
         let w = wander(60.1);
-        assert!(dep(&mut tr, 60.1, [w[0], w[1] + 10.0, w[2]]).is_nan());
+        assert!(dep(&mut tr, [w[0], w[1] + 10.0, w[2]]).is_nan());
         // Back on the track: a return, not a departure.
         let w = wander(60.2);
-        assert!(dep(&mut tr, 60.2, w).is_nan());
+        assert!(dep(&mut tr, w).is_nan());
         // A 0.5 m/s ramp north for 40 s: never a jump off the track.
         let mut tr = VelocityTrack::default();
         run(&mut tr, 0, 600, &wander);
         for i in 0..400 {
             let t = 60.0 + i as f64 * 0.1;
             let w = wander(t);
-            assert!(dep(&mut tr, t, [w[0] + 0.5 * (t - 60.0), w[1], w[2]]).is_nan(), "at {t:.1} s");
+            assert!(dep(&mut tr, [w[0] + 0.5 * (t - 60.0), w[1], w[2]]).is_nan(), "at {t:.1} s");
         }
     }
 
