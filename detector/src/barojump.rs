@@ -108,6 +108,7 @@ impl BaroJump {
     /// then in the baro's 6 s windows for 32 epochs). While the baro is
     /// fed: remember a departing jump, keep the last one while it waits or
     /// holds, or forget it.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn epoch(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack, withheld: bool) {
         let seen = if self.blocked { None } else { jump_of(gps, dop) };
         let undone = match (seen, self.jump) {

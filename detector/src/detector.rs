@@ -271,7 +271,7 @@ const IMU_TIMEOUT: f64 = 0.25; // s: older IMU is not used for prediction
 /// this many in-flight windows learnt: its σ must be the flight's, not the
 /// ground's (on the real Loiter log, take-off alone reaches 3–6).
 const IMU_ARM_S: f64 = 20.0;
-use crate::indicators::IMU_ARM_WINDOWS;
+use crate::indicators::{IMU_ARM_WINDOWS, IMU_CALL};
 /// The IMU consistency judges only an IMU logged at least this often, s
 /// between samples (25 Hz): sparser records are snapshots of a fast sensor
 /// that integrate a turn's changing acceleration poorly (the shared
@@ -438,6 +438,10 @@ pub struct Detector {
     /// Boot time (s) until which the vehicle counts as upset (see
     /// [`kind::UPSET`]); NaN when it never was.
     upset_until: f64,
+    /// The filter's accelerometer-bias estimate at the last normal epoch
+    /// whose IMU test was calm (body, m/s²): what an IMU episode rolls the
+    /// estimate back to (see `gps_epoch`).
+    bias_calm: [f64; 3],
 }
 
 /// A GPS fix in the local frame.
@@ -2237,6 +2241,7 @@ impl Detector {
             stats: Stats::default(),
             oracle: false,
             upset_until: f64::NAN,
+            bias_calm: [0.0; 3],
             cfg,
         }
     }
@@ -2732,10 +2737,27 @@ impl Detector {
         }
         let restart = !self.oracle && (self.quality.reacquired(fix.eph) || fault_ended || gps_back || drag_end || upset || baro_back);
         let was_active = self.episode.active;
+        let was_imu = self.episode.imu;
         let fault = self.episode.open(verdict.fault && !restart, &mut self.ind, self.oracle);
         // While the IMU is the suspect, its bias estimate is not learnt from
-        // the fault (or the test would see the learnt error after it ends).
-        kf.set_hold_bias(self.episode.imu);
+        // the fault (or the test would see the learnt error after it ends):
+        // through an IMU episode, and whenever the IMU test calls, armed or
+        // not. Before it has armed no episode opens: battery tune #1444, a
+        // 0.86 m/s² bias from 10 s, was learnt as the sensor's bias (0.66
+        // of it) until the test went quiet and armed, and its end opened
+        // an IMU episode to the end of the flight (164 FP epochs).
+        kf.set_hold_bias(self.episode.imu || ind.imu >= IMU_CALL);
+        // The filter learnt part of the fault as the sensor's bias over the
+        // seconds the IMU test took to call it (battery eval #284: 0.26 of
+        // a 1.16 m/s² bias), which the estimate, held through the episode,
+        // then carried past the fault's end: an IMU episode to the end of
+        // the flight. The episode rolls it back to the last calm epoch's,
+        // from before the onset.
+        if self.episode.imu && !was_imu {
+            kf.set_accel_bias(&self.bias_calm.into());
+        } else if !fault && self.ind.imu_recent(IMU_RECENT_S) < IMU_CALM {
+            self.bias_calm = kf.accel_bias().into();
+        }
         let ev = Evidence {
             ind: &ind,
             r_vel: self.ind.r_vel_unfolded(),
@@ -3556,7 +3578,7 @@ mod codec_impls {
     impl_codec!(Output { t, status, f, r, c, kind, gps_epoch, driver });
     impl_codec!(Stats { rows, gps_epochs, imu_rows, baro_rows, retrains, filter_resets, data_gaps, filter_errors });
     impl_codec!(Ring { buf, head, len });
-    impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until });
+    impl_codec!(Detector { cfg, kf, anchor, imu, ind, clock, imu_noise, last_est, consistency, quality, episode, methods, learning, resid, last, last_ind, stats, oracle, upset_until, bias_calm });
     impl_codec!(ReceiverQuality { pos, speed, degraded_run, declared, acquired, last_declared });
     impl_codec!(UsualClaim { ln, learnt });
     impl_codec!(Clock { last_t, last_fix, gps_dt, gps_jitter, last_fields });

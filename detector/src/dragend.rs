@@ -186,6 +186,7 @@ impl DragEnd {
     /// A position episode opened at this epoch (`t`, the last `push`) on a
     /// jump of the position off its velocity track, `jump` (N, E, m): arm
     /// the confirmation. The newest entry is the first after the jump.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn arm(&mut self, t: f64, jump: [f64; 2]) {
         self.pending = None;
         self.ruled_out = false;
@@ -213,6 +214,7 @@ impl DragEnd {
     /// shape the learnt σ measures: a longer wait lets `z`'s slow drift,
     /// the accelerometer bias integrated, pass for a shift), then disarmed;
     /// given up `GIVE_UP_S` after the jump.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn confirmed(&mut self, t: f64, flown: f64) -> bool {
         let Some(p) = self.pending else { return false };
         if t - p.t0 > GIVE_UP_S {

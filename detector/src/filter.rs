@@ -213,6 +213,12 @@ impl Kf {
         self.x.fixed_rows::<3>(IB).into_owned()
     }
 
+    /// Set the accelerometer-bias estimate, body frame, m/s² (its
+    /// covariance stays): an IMU episode rolls the fault back off it.
+    pub fn set_accel_bias(&mut self, b: &Vector3<f64>) {
+        self.x.fixed_rows_mut::<3>(IB).copy_from(b);
+    }
+
     /// The barometer reading the state predicts: altitude up plus the baro
     /// offset, m.
     pub fn baro_height(&self) -> f64 {

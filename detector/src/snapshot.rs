@@ -78,8 +78,11 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// (`Episode::long_coast`), the GPS track's quick origin
 /// (`VelocityTrack::quick_origin`). 25: the drag-off's end confirmation's
 /// short shape (`dragend::ShiftRms`, one per shape). 26: the baro's
-/// jump remembered (`barojump::BaroJump`).
-pub const VERSION: u32 = 27;
+/// jump remembered (`barojump::BaroJump`). 27: the ramp test's fast arm
+/// (`ramp::RampTest::fast_stat`). 28: the IMU tests' learning bound
+/// (`LagTest::learn_below`) and the bias estimate an IMU episode rolls the
+/// filter back to (`Detector::bias_calm`).
+pub const VERSION: u32 = 28;
 
 #[derive(Clone)]
 struct Header {

@@ -89,6 +89,7 @@ impl Window {
     /// Every epoch: `e` joins the recent span. Returns the window's start
     /// when it is at least `SPAN_S` old, and the recent span's start when
     /// it is at least half of `RECENT_S` old.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn note(&mut self, e: Entry) -> (Option<Entry>, Option<Entry>) {
         keep(&mut self.recent, e, RECENT_S);
         if self.ring.first().is_some_and(|s| e.t - s.t > MAX_REF_S) {
