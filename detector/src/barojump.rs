@@ -108,6 +108,9 @@ impl BaroJump {
     /// then in the baro's 6 s windows for 32 epochs). While the baro is
     /// fed: remember a departing jump, keep the last one while it waits or
     /// holds, or forget it.
+    ///
+    /// Built for size in the core module: once per GPS epoch (issue 15's
+    /// budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn epoch(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack, withheld: bool) {
         let seen = if self.blocked { None } else { jump_of(gps, dop) };

@@ -186,6 +186,9 @@ impl DragEnd {
     /// A position episode opened at this epoch (`t`, the last `push`) on a
     /// jump of the position off its velocity track, `jump` (N, E, m): arm
     /// the confirmation. The newest entry is the first after the jump.
+    ///
+    /// Built for size in the core module: once per position episode
+    /// (issue 15's budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn arm(&mut self, t: f64, jump: [f64; 2]) {
         self.pending = None;
@@ -214,6 +217,9 @@ impl DragEnd {
     /// shape the learnt σ measures: a longer wait lets `z`'s slow drift,
     /// the accelerometer bias integrated, pass for a shift), then disarmed;
     /// given up `GIVE_UP_S` after the jump.
+    ///
+    /// Built for size in the core module: judged only while armed (issue
+    /// 15's budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn confirmed(&mut self, t: f64, flown: f64) -> bool {
         let Some(p) = self.pending else { return false };

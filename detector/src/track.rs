@@ -318,6 +318,9 @@ impl VelocityTrack {
     /// flight read a faster leg's as a departure: battery tune #60 and
     /// #105 (aggressive, 10 Hz) had 50 and 54 false-positive epochs so,
     /// now 0; #133 16 → 1, #137 27 → 37.
+    ///
+    /// Built for size in the core module: once per GPS epoch (issue 15's
+    /// budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn departure_net(&self, k: [f64; 2]) -> f64 {
         let c = self.error_model(k);

@@ -89,6 +89,9 @@ impl Window {
     /// Every epoch: `e` joins the recent span. Returns the window's start
     /// when it is at least `SPAN_S` old, and the recent span's start when
     /// it is at least half of `RECENT_S` old.
+    ///
+    /// Built for size in the core module: once per GPS epoch (issue 15's
+    /// budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn note(&mut self, e: Entry) -> (Option<Entry>, Option<Entry>) {
         keep(&mut self.recent, e, RECENT_S);
