@@ -192,14 +192,10 @@ impl RampTest {
     /// called 27 m into a vertical ramp, back 73 m in one fix).
     fn jumped_back(&self, k: usize, e0: &[f64; 3], before: Option<[f64; 3]>, raw: &[f64; 3]) -> bool {
         let (Some(b), true) = (before, self.jump_t == Some(self.t)) else { return false };
-        let axes = group(k);
-        let (mut along, mut called2) = (0.0, 0.0);
-        for &a in axes {
-            let c = b[a] - e0[a];
-            along -= (raw[a] - b[a]) * c;
-            called2 += c * c;
-        }
-        called2 > 0.0 && along >= 0.5 * called2
+        let called: [f64; 3] = core::array::from_fn(|a| b[a] - e0[a]);
+        let back: [f64; 3] = core::array::from_fn(|a| b[a] - raw[a]);
+        let called2 = dot(k, &called, &called);
+        called2 > 0.0 && dot(k, &back, &called) >= 0.5 * called2
     }
 
     /// A jump lies inside the window ending now.
@@ -582,6 +578,7 @@ mod tests {
         assert!(calls.iter().all(|&(t, fast)| t >= 100.0 + RECENT_S && !fast), "{:?}", &calls[..calls.len().min(3)]);
         assert!(r.fast_ms[0].sqrt() < 2.0, "fast σ {:.2} m", r.fast_ms[0].sqrt());
     }
+
     #[test]
     fn a_1_hz_receiver_is_judged_by_the_fast_arm() {
         // A 1 Hz receiver whose intervals come out a hair over a second
@@ -612,7 +609,6 @@ mod tests {
     }
 }
 
-/// The snapshot codec of this file's state ([`crate::codec`]).
 /// The snapshot codec of this file's state ([`crate::codec`]).
 mod codec_impls {
     use super::*;
