@@ -8,16 +8,13 @@
 
 mod common;
 
-use common::flagged_after;
+use common::share_and_after;
 use navguard::battery::{self, Flight, Split};
-use navguard::Config;
 
 /// The share of the flight's first fault flagged, and the epochs flagged
 /// in the 20 s after it, of how many.
 fn held(f: &Flight) -> (f64, usize, usize) {
-    let r = battery::run(f, &Config::default()).unwrap();
-    let (n, of) = flagged_after(f, 20.0);
-    (r.events[0].share, n, of)
+    share_and_after(f, 20.0)
 }
 
 /// Regression: instance 3 of the 10 m, 60 s step check (hover, 5 Hz white

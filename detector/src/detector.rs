@@ -319,6 +319,11 @@ const RETURN_MIN_SIGMAS: f64 = 6.0;
 /// that undoes it end a fault, and a 15.6 m vertical step under a 1 Hz
 /// receiver is 5.4 σ_Δ (battery tune #551).
 const KEEP_MIN_SIGMAS: f64 = 4.0;
+/// A position-only episode's offset (`Episode::off_sigmas`) into the
+/// position group's R: `KEEP_MIN_SIGMAS` lands just above the ANFIS
+/// boundary (R ≈ 2.55), so an offset the episode's end would keep holds
+/// the episode.
+const HOLD_R_SCALE: f64 = 2.8 / KEEP_MIN_SIGMAS;
 /// s: time constant of the learnt accelerometer noise.
 const IMU_PSD_TAU: f64 = 2.0;
 const GATE: f64 = 2.5; // per-group R above which a sensor is withheld during a fault
@@ -804,6 +809,36 @@ impl Residuals {
             resid[3..6].copy_from_slice(&vin.nu);
         }
     }
+}
+
+/// How many σ the fix `nu` (m) sits off the filter along its offset. σ
+/// along the offset: a step on one axis is judged by that axis' noise, not
+/// by the three axes' together; and by the larger of the epoch-to-epoch
+/// noise (`sigma_pos`, σ_Δ) and the position's wander about its velocity
+/// track (`sigma_track`), so a receiver that moves smoothly (σ_Δ 0.15 m on
+/// the paper's flight) does not keep the offset of a brief false episode,
+/// which then ate a ramp's first epochs as its "end".
+#[inline(never)]
+fn along_sigmas(nu: &[f64; 3], sigma_pos: &[f64; 3], sigma_track: &[f64; 3]) -> f64 {
+    let len2: f64 = nu.iter().map(|x| x * x).sum();
+    let sigma2: f64 = (0..3).map(|a| (nu[a] * sigma_pos[a].fmax(sigma_track[a])).powi(2)).sum::<f64>();
+    (len2 * len2 / sigma2).sqrt()
+}
+
+/// The fix's offset `nu` from the filter (m) is a step's onset: at least
+/// `KEEP_MIN_SIGMAS` σ off along it (`along_sigmas`), and mostly this
+/// epoch's jump off the velocity track (`jump`, m: at least
+/// `DRAG_RETURN_NEW` of the offset along it). An offset that built up over
+/// epochs the verdict passed is the truth coming back or the receiver's
+/// wander, not a fault to hold: a drag-off's end split across a dropped
+/// record (battery eval #71: 6.6 m, held for 56 s), a Gauss–Markov
+/// receiver's wander walking the windows over the boundary (tune #1253).
+#[cfg_attr(navguard_cold_size, optimize(size))]
+#[inline(never)]
+fn step_onset(nu: &[f64; 3], jump: Option<[f64; 3]>, sigma_pos: &[f64; 3], sigma_track: &[f64; 3]) -> bool {
+    let Some(j) = jump else { return false };
+    let nu2: f64 = nu.iter().map(|x| x * x).sum();
+    along_sigmas(nu, sigma_pos, sigma_track) > KEEP_MIN_SIGMAS && (0..3).map(|a| j[a] * nu[a]).sum::<f64>() >= DRAG_RETURN_NEW * nu2
 }
 
 /// A position jump is the end of a drag-off the filter had followed when
@@ -1917,6 +1952,10 @@ struct Episode {
     /// The position jump that opened this episode was no drag-off's end
     /// (`DragEnds::ruled_out`): it is judged for `POSITION_COAST_LONG_S`.
     long_coast: bool,
+    /// The position was withheld on a step's onset (`step_onset`): the
+    /// fix's offset off the coasted filter is then the fault's evidence
+    /// (`Episode::held`).
+    fresh: bool,
 }
 
 /// What the episode stage decided at a GPS epoch.
@@ -2020,21 +2059,28 @@ impl Episode {
     /// offset is kept like a coasted-out episode's, so the step's own end
     /// undoes it instead of opening a new episode.
     fn ended_off_track(&mut self, ev: &Evidence) {
+        if self.off_sigmas(&ev.res.pin.nu, &ev.sigma_pos, &ev.sigma_track) > KEEP_MIN_SIGMAS {
+            self.accepted = Some(ev.res.pin.nu);
+        }
+    }
+
+    /// The position group's R from the fix's offset `nu` (m) off the
+    /// coasted filter (`off_sigmas`, scaled by `HOLD_R_SCALE`) in an
+    /// episode that opened on a step's onset; NaN otherwise.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
+    fn held(&self, nu: &[f64; 3], sigma_pos: &[f64; 3], sigma_track: &[f64; 3]) -> f64 {
+        if self.fresh { self.off_sigmas(nu, sigma_pos, sigma_track) * HOLD_R_SCALE } else { f64::NAN }
+    }
+
+    /// `along_sigmas` in a position-only episode; NaN otherwise (the
+    /// filter's offset after a whole-receiver or IMU coast is its own
+    /// drift).
+    fn off_sigmas(&self, nu: &[f64; 3], sigma_pos: &[f64; 3], sigma_track: &[f64; 3]) -> f64 {
         if !self.withheld.gps_pos() || self.receiver_lost || self.imu {
-            return;
+            return f64::NAN;
         }
-        // σ along the offset: a step on one axis is judged by that axis'
-        // noise, not by the three axes' together; and by the larger of the
-        // epoch-to-epoch noise (σ_Δ) and the position's wander about its
-        // velocity track, so a receiver that moves smoothly (σ_Δ 0.15 m on
-        // the paper's flight) does not keep the offset of a brief false
-        // episode, which then ate a ramp's first epochs as its "end".
-        let nu = ev.res.pin.nu;
-        let len2: f64 = nu.iter().map(|x| x * x).sum();
-        let sigma2: f64 = (0..3).map(|a| (nu[a] * ev.sigma_pos[a].fmax(ev.sigma_track[a])).powi(2)).sum::<f64>() / len2;
-        if len2 > KEEP_MIN_SIGMAS * KEEP_MIN_SIGMAS * sigma2 {
-            self.accepted = Some(nu);
-        }
+        along_sigmas(nu, sigma_pos, sigma_track)
     }
 
     /// How long the episode may coast, s: an IMU-only coast (the whole
@@ -2676,7 +2722,18 @@ impl Detector {
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
         let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim };
-        let (ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, epoch);
+        let (mut ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, epoch);
+        // A position-only episode lasts while the fix stays off the coasted
+        // filter: the windows' R is an RMS over epochs from before the
+        // onset, so a step's second epoch read as normal and the filter
+        // followed the step (the 5 m step check's instance 4: 8 of 150
+        // epochs flagged).
+        let sigma_pos: [f64; 3] = core::array::from_fn(|a| self.ind.sigma(a));
+        let sigma_coast = core::array::from_fn(|a| self.ind.coast_sigma(a));
+        let sigma_track = self.consistency.track.sigmas();
+        let held = self.episode.held(&res.pin.nu, &sigma_coast, &sigma_track);
+        ind.fold(0, held);
+        self.ind.fold_unfolded(held);
         self.last_ind = ind;
         let label = self.oracle.then_some(s.label);
         let mut verdict = self.methods.decide(&self.cfg, &self.learning.anfis, kf, &res, &ind, label);
@@ -2764,7 +2821,7 @@ impl Detector {
             incoherence: self.ind.incoherence(),
             dec: verdict.dec.as_ref(),
             res: &res,
-            sigma_pos: core::array::from_fn(|a| self.ind.sigma(a)),
+            sigma_pos,
             on_track: self.consistency.track.on_track(),
             sigma_track: self.consistency.track.sigmas(),
             baro_off: self.consistency.baro_still_off(),
@@ -2780,6 +2837,9 @@ impl Detector {
         // m/s drag for 7 s whose 6.5 m return was judged as a step for 56 s).
         let opened_on_position = !self.oracle && (!was_active || !pos_before) && self.episode.withheld.gps_pos();
         self.consistency.arm_drag_end(fix.t, opened_on_position, &step);
+        if opened_on_position {
+            self.episode.fresh = step_onset(&res.pin.nu, self.consistency.track.jump(), &sigma_coast, &sigma_track);
+        }
         if !step.fault && !step.reset {
             self.consistency.track.learn();
             self.consistency.baro_gps_level.learn();
@@ -3023,6 +3083,27 @@ mod tests {
         assert!(!r.drag_returned(100.0, track, SIGMA_DV));
         // NaN previous residuals (references just reset): nothing is new.
         assert!(!drag_res([-30.0, 0.0, 0.0], [f64::NAN; 3], [-0.5, 0.0, 0.0]).drag_returned(100.0, track, SIGMA_DV));
+    }
+
+    #[test]
+    fn a_step_onset_is_a_new_jump_of_4_sigma_along_its_offset() {
+        let (sigma, track) = ([1.0, 1.0, 2.0], [0.5, 0.5, 3.0]);
+        // 5 m north: 5σ along it, whatever the vertical's σ.
+        assert!((along_sigmas(&[5.0, 0.0, 0.0], &sigma, &track) - 5.0).abs() < 1e-12);
+        // The larger of the two σ per axis: 6 m down is 2σ of the track's 3 m.
+        assert!((along_sigmas(&[0.0, 0.0, 6.0], &sigma, &track) - 2.0).abs() < 1e-12);
+        // Along a diagonal: σ² weighted by the offset's share on each axis.
+        let s = along_sigmas(&[3.0, 0.0, 3.0], &sigma, &track);
+        assert!((s - 18f64.sqrt() / 5f64.sqrt()).abs() < 1e-12, "{s}");
+        assert!(along_sigmas(&[0.0; 3], &sigma, &track).is_nan());
+        // A 5 m step at this epoch is an onset...
+        assert!(step_onset(&[5.0, 0.0, 0.0], Some([4.8, 0.1, 0.0]), &sigma, &track));
+        // ...not under 4σ, nor when most of it was there before the jump
+        // (0.4 of it new), nor across it, nor with no track yet.
+        assert!(!step_onset(&[3.5, 0.0, 0.0], Some([3.5, 0.0, 0.0]), &sigma, &track));
+        assert!(!step_onset(&[5.0, 0.0, 0.0], Some([2.0, 0.0, 0.0]), &sigma, &track));
+        assert!(!step_onset(&[5.0, 0.0, 0.0], Some([0.0, 5.0, 0.0]), &sigma, &track));
+        assert!(!step_onset(&[5.0, 0.0, 0.0], None, &sigma, &track));
     }
 
     #[test]
@@ -3590,6 +3671,6 @@ mod codec_impls {
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });
     impl_codec!(Methods { prev_nu, maha, baro_inn, pool });
     impl_codec!(Withheld { groups, baro_calm });
-    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted, long_coast });
+    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted, long_coast, fresh });
     impl_codec!(Learning { anfis, d1, d2, new_faults, d0_x, d0_y } skip { train_x, train_y, cost });
 }

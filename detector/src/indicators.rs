@@ -211,7 +211,9 @@ impl SlidingSum {
         self.since_resum = 0;
     }
 
-    /// Add one entry, evicting the oldest when full.
+    /// Add one entry, evicting the oldest when full. Built for size in the
+    /// core module: twice per GPS epoch (issue 15's budget).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn push(&mut self, e: &[f64; SUMS]) {
         let cap = self.buf.len();
         if self.len == cap {
@@ -1048,6 +1050,15 @@ impl IndicatorEngine {
             }
         }
         Ok(())
+    }
+
+    /// σ_Δ of a position axis with the filter's variance grown since its
+    /// last accepted epoch added (m): how far a fix may sit off a filter
+    /// that coasted since.
+    #[inline(never)]
+    pub fn coast_sigma(&self, axis: usize) -> f64 {
+        let s = self.sigma(axis);
+        self.axes.get(axis).map_or(s, |a| (s * s + (a.p_peak - a.p_ref).fmax(0.0)).sqrt())
     }
 
     /// σ_Δ currently used for an axis.

@@ -81,8 +81,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// jump remembered (`barojump::BaroJump`). 27: the ramp test's fast arm
 /// (`ramp::RampTest::fast_stat`). 28: the IMU tests' learning bound
 /// (`LagTest::learn_below`) and the bias estimate an IMU episode rolls the
-/// filter back to (`Detector::bias_calm`).
-pub const VERSION: u32 = 28;
+/// filter back to (`Detector::bias_calm`). 29: a position episode opened
+/// on a step's onset (`Episode::fresh`).
+pub const VERSION: u32 = 29;
 
 #[derive(Clone)]
 struct Header {

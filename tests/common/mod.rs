@@ -23,6 +23,14 @@ pub fn flagged_after_fault(f: &Flight, i: usize, len: f64) -> (usize, usize) {
     (after.iter().filter(|st| **st != 0).count(), after.len())
 }
 
+/// The share of the flight's first fault flagged, and the epochs flagged
+/// in the `len` s after it, of how many (default config).
+pub fn share_and_after(f: &Flight, len: f64) -> (f64, usize, usize) {
+    let r = battery::run(f, &Config::default()).unwrap();
+    let (n, of) = flagged_after(f, len);
+    (r.events[0].share, n, of)
+}
+
 /// The battery flight `index` of `split`, whose first fault is of kind
 /// `kind`, run with the default config: its false-positive GPS epochs
 /// (flagged, labelled healthy).
