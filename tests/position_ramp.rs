@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::flagged_after;
+use common::{false_positives, flagged_after};
 use navguard::battery::{self, Flight, Split};
 use navguard::Config;
 
@@ -33,6 +33,21 @@ fn the_jump_at_a_drag_offs_end_is_not_a_ramp() {
     assert_eq!(f.faults[0].kind.name(), "drag-off");
     let (n, of) = flagged_after(&f, 90.0);
     assert!(of > 400 && n * 50 <= of, "{n} of {of} epochs flagged in the 90 s after the drag-off");
+}
+
+/// Regression: eval #108 (fixed wing, 1 Hz white receiver σ 0.64 m) and
+/// eval #429 (aggressive, 5 Hz, σ 0.71 m): a drag-off's 6.3 m return, on
+/// which the detector re-anchored (`Residuals::drag_returned`). The ramp
+/// test's smoothing took half of the 1 Hz jump at once, so it was no
+/// "jump" for it; 15 s later the window's change read as a ramp, flagged
+/// for 48 s (74 false-positive epochs on #108, 357 on #429). The
+/// re-anchoring notes the jump: 3 and 1.
+#[test]
+fn a_return_the_detector_re_anchored_on_is_not_a_ramp() {
+    for (index, was) in [(108, 74), (429, 357)] {
+        let fp = false_positives(Split::Eval, index, "drag-off");
+        assert!(fp <= 10, "eval #{index}: {fp} false-positive epochs (were {was})");
+    }
 }
 
 /// The first fault event of `f` run with the default config: its delay (s)

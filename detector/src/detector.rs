@@ -1295,22 +1295,28 @@ impl Consistency {
         // Asked first: a remembered offset is forgotten once undone, even
         // when the track also says the fault ended.
         let undone = episode.undone(res);
-        if undone {
-            // The track's baseline learnt the fault while it was accepted
-            // (battery tune #551: a 15.6 m vertical step for 117 s): the
-            // return is the truth, so the baseline moves with it.
-            self.track.rebase();
-            return true;
-        }
-        let back = self.track.returned() || {
+        let back = undone || self.track.returned() || {
             let dragged = usual && res.drag_returned(self.flight_time, self.track.jump(), sigma_dv);
             if dragged {
                 self.track.rebase();
             }
             dragged
         };
-        if back {
+        if undone {
+            // The track's baseline learnt the fault while it was accepted
+            // (battery tune #551: a 15.6 m vertical step for 117 s): the
+            // return is the truth, so the baseline moves with it.
+            self.track.rebase();
+        } else if back {
             episode.accepted = Some(res.pin.nu);
+        }
+        // The return is a jump of the track, which the ramp test must not
+        // read as a ramp once its smoothing has taken it in: at 1 Hz the
+        // smoothing takes half of a jump at once, under the ramp test's
+        // own jump bar (battery eval #108: a drag-off's 6.3 m return, then
+        // 48 s flagged as a ramp).
+        if back {
+            self.ramp.note_jump();
         }
         back
     }
@@ -1461,6 +1467,10 @@ impl Consistency {
         }
         if v {
             self.track.rebase_axis(2);
+        }
+        // A jump for the ramp test too (see `unflagged_fault_ended`).
+        if h || v {
+            self.ramp.note_jump();
         }
         h || v
     }
@@ -2068,7 +2078,6 @@ impl Episode {
     /// coasted filter (`off_sigmas`, scaled by `HOLD_R_SCALE`) in an
     /// episode that opened on a step's onset; NaN otherwise.
     #[cfg_attr(navguard_cold_size, optimize(size))]
-    #[inline(never)]
     fn held(&self, nu: &[f64; 3], sigma_pos: &[f64; 3], sigma_track: &[f64; 3]) -> f64 {
         if self.fresh { self.off_sigmas(nu, sigma_pos, sigma_track) * HOLD_R_SCALE } else { f64::NAN }
     }
@@ -2723,11 +2732,11 @@ impl Detector {
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
         let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim };
         let (mut ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, epoch);
-        // A position-only episode lasts while the fix stays off the coasted
-        // filter: the windows' R is an RMS over epochs from before the
-        // onset, so a step's second epoch read as normal and the filter
-        // followed the step (the 5 m step check's instance 4: 8 of 150
-        // epochs flagged).
+        // A position-only episode that opened on a step's onset lasts while
+        // the fix stays off the coasted filter (`Episode::held`): the
+        // windows' R is an RMS over epochs from before the onset, so a
+        // step's second epoch read as normal and the filter followed the
+        // step (the 5 m step check's instance 4: 8 of 150 epochs flagged).
         let sigma_pos: [f64; 3] = core::array::from_fn(|a| self.ind.sigma(a));
         let sigma_coast = core::array::from_fn(|a| self.ind.coast_sigma(a));
         let sigma_track = self.consistency.track.sigmas();
