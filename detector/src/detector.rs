@@ -834,7 +834,6 @@ fn along_sigmas(nu: &[f64; 3], sigma_pos: &[f64; 3], sigma_track: &[f64; 3]) -> 
 /// record (battery eval #71: 6.6 m, held for 56 s), a Gauss–Markov
 /// receiver's wander walking the windows over the boundary (tune #1253).
 #[cfg_attr(navguard_cold_size, optimize(size))]
-#[inline(never)]
 fn step_onset(nu: &[f64; 3], jump: Option<[f64; 3]>, sigma_pos: &[f64; 3], sigma_track: &[f64; 3]) -> bool {
     let Some(j) = jump else { return false };
     let nu2: f64 = nu.iter().map(|x| x * x).sum();
@@ -865,6 +864,14 @@ impl Residuals {
     /// The jump at this fix looks like the return from a drag-off the
     /// filter followed (see [`DRAG_RETURN_Z`]): true fix back, re-anchor on
     /// it. `flown`: time flown with the filter running, s.
+    /// The horizontal fix jumped at this epoch: its residual moved by more
+    /// than `track::NEAR` of σ_Δ (`sigma_pos`, m), the epoch-to-epoch
+    /// change's σ, since the previous epoch.
+    #[inline(never)]
+    fn jumped_h(&self, sigma_pos: &[f64; 3]) -> bool {
+        ((self.pin.nu[0] - self.prev_r[0]) / sigma_pos[0]).hypot((self.pin.nu[1] - self.prev_r[1]) / sigma_pos[1]) > crate::track::NEAR
+    }
+
     fn drag_returned(&self, flown: f64, track_jump: Option<[f64; 3]>, sigma_dv: [f64; 3]) -> bool {
         let (Some(vin), Some(gps_jump)) = (&self.vin, track_jump) else { return false };
         let p = &self.pin.nu;
@@ -2769,6 +2776,12 @@ impl Detector {
         // fault verdict.
         let judged = !self.oracle && (self.episode.active || verdict.fault);
         let vertical = if judged { self.consistency.vertical_return() } else { None };
+        // The GPS altitude's return alone needs its horizontal fix not to
+        // have jumped with it (`Residuals::jumped_h`): a receiver whose
+        // noise grew jumps on every axis, and its altitude lands back on
+        // the baro's level by chance (the paper flight's noise fault, seed
+        // 2: 16 re-anchorings in its 15 s, two epochs missed at each).
+        let vertical = vertical.filter(|&baro| baro || !res.jumped_h(&sigma_pos));
         let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back || vertical == Some(false);
         // The baro back on both its levels, from beyond `FAR` σ to within
         // `NEAR` (see `track`): the end of a baro fault. The jump back is

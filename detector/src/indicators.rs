@@ -1055,7 +1055,6 @@ impl IndicatorEngine {
     /// σ_Δ of a position axis with the filter's variance grown since its
     /// last accepted epoch added (m): how far a fix may sit off a filter
     /// that coasted since.
-    #[inline(never)]
     pub fn coast_sigma(&self, axis: usize) -> f64 {
         let s = self.sigma(axis);
         self.axes.get(axis).map_or(s, |a| (s * s + (a.p_peak - a.p_ref).fmax(0.0)).sqrt())
