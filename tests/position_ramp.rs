@@ -85,8 +85,7 @@ fn a_fast_ramp_under_a_noisy_receiver_is_held_longer() {
 }
 
 /// Regression: tune #724 (survey, 10 Hz white receiver σ 2.9 m) and eval
-/// #391 (hover, 10 Hz white σ 1.4 m, never used for a decision): 0.47
-/// and 0.32 m/s ramps. The jump bar's usual distance learnt from its 1 m
+/// #391 (hover, 10 Hz white σ 1.4 m): 0.47 and 0.32 m/s ramps. The jump bar's usual distance learnt from its 1 m
 /// prior over minutes, so the receiver's noise made "jumps" every few
 /// seconds, each of which kept both arms' σ from learning for 34 s; the
 /// ramps were judged late or never (#724: 29% of it flagged; #391: none

@@ -2924,8 +2924,10 @@ impl Detector {
     #[inline(never)]
     fn reanchored(&mut self) {
         self.stats.filter_resets += 1;
-        // The fix re-anchored on ends what the episode judged: the ramp
-        // test's window then holds that end, not a ramp (battery tune
+        // The filter re-anchored on the fix (an episode's end, a coast
+        // past its limit, a fault's end read outside any episode): the
+        // ramp test's window then holds that fault's end, not a ramp; a
+        // ramp it already judges goes on (battery tune
         // #1253: a 6.8 m step held to its end, whose return the window
         // read as a ramp 25 s later, 319 false-positive epochs, 417 with
         // the recovery rule above alone, now 7; eval #361, a drag-off's
