@@ -2169,8 +2169,7 @@ impl Episode {
         // sits under `RECOVER_R`, so the episode recovered every five
         // calm epochs and re-opened at the next (the 10 m step check's
         // instance 5, a 5 Hz receiver of 2.2 m, called as a ramp 15 s in:
-        // 62% of the step flagged, now 77%; tune #463, an 11.5 m step for
-        // 117 s: 128 epochs more).
+        // 62% of the step flagged, now 77%).
         let calm = (0..2).all(|g| !(ind.inc_group[g] > RECOVER_INC)) && offset_ok && !ev.departed(2) && !(self.withheld.baro() && ev.baro_off) && !ev.ramping;
         self.calm_epochs = if calm { self.calm_epochs + 1 } else { 0 };
         !oracle && !self.imu && self.calm_epochs >= RECOVER_EPOCHS && elapsed > 0.5
@@ -2924,18 +2923,6 @@ impl Detector {
     #[inline(never)]
     fn reanchored(&mut self) {
         self.stats.filter_resets += 1;
-        // The filter re-anchored on the fix (an episode's end, a coast
-        // past its limit, a fault's end read outside any episode): the
-        // ramp test's window then holds that fault's end, not a ramp; a
-        // ramp it already judges goes on (battery tune
-        // #1253: a 6.8 m step held to its end, whose return the window
-        // read as a ramp 25 s later, 319 false-positive epochs, 417 with
-        // the recovery rule above alone, now 7; eval #361, a drag-off's
-        // end, 340 -> 51). As for the ends `unflagged_fault_ended` and
-        // `drag_ended` re-anchor on. It also bars a ramp whose episode
-        // ended early from being called for the window's 34 s (tune
-        // #1223: a 0.3 m/s ramp, 155 epochs more missed; tune #136, #38).
-        self.consistency.ramp.note_jump();
         self.episode.reanchored(self.consistency.baro_still_off());
         self.ind.reset_references();
         self.last_est.baro_h = None;

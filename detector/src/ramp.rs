@@ -407,7 +407,7 @@ impl RampTest {
         // every few seconds, and each such "jump" kept both arms' σ from
         // learning for the window's 34 s (battery tune #638, 1 Hz, 6 m of
         // vertical noise: no σ learnt before 72 s). Ramps were judged late
-        // or never: tune #724 (10 Hz, 2.9 m), a 0.47 m/s ramp 29% flagged,
+        // or never: tune #724 (10 Hz, 2.9 m), a 0.47 m/s ramp 34% flagged,
         // now 76%; eval #391 (10 Hz, 1.4 m), 0.32 m/s, 0% -> 60%.
         let w_fast = (self.dt / (self.t - SPAN_S).clamp(FAST_START_S, TAU_S)).fmin(1.0);
         if self.dev.is_finite() && self.jump_t != Some(self.t) {
