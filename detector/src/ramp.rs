@@ -83,8 +83,7 @@ const RELEASE_Z: f64 = 2.0;
 /// window (the smoothing's own rise after it looks like one).
 const JUMP_Z: f64 = 5.0;
 const JUMP_MIN_M: f64 = 2.0;
-/// Prior of that usual distance, m. It learns with the fast arm's fast
-/// start (see `learn`), not from this prior over minutes.
+/// Prior of that usual distance, m.
 const DEV0_M: f64 = 1.0;
 /// After the track restarts, its first `SETTLE_S` are not the start of a
 /// ramp's window, true s: a receiver re-acquiring walks its position onto
@@ -383,11 +382,6 @@ impl RampTest {
         stat
     }
 
-    /// A ramp is being judged: it was called and has not ended.
-    pub fn judging(&self) -> bool {
-        self.judging
-    }
-
     /// The last epoch ended a ramp with the position back on its track from
     /// before it.
     pub fn returned(&self) -> bool {
@@ -401,18 +395,9 @@ impl RampTest {
         let Some(e) = self.pending.take().filter(|_| !self.judging) else { return };
         self.window.enter(e);
         let w = (self.dt / TAU_S).fmin(1.0);
-        // The fast arm's σ and the jump bar's usual distance start fast.
-        // The bar's distance once learnt from its 1 m prior over minutes:
-        // a noisy receiver's fixes sat 5 of those off the smoothed track
-        // every few seconds, and each such "jump" kept both arms' σ from
-        // learning for the window's 34 s (battery tune #638, 1 Hz, 6 m of
-        // vertical noise: no σ learnt before 72 s). Ramps were judged late
-        // or never: tune #724 (10 Hz, 2.9 m), a 0.47 m/s ramp 34% flagged,
-        // now 76%; eval #391 (10 Hz, 1.4 m), 0.32 m/s, 0% -> 60%.
-        let w_fast = (self.dt / (self.t - SPAN_S).clamp(FAST_START_S, TAU_S)).fmin(1.0);
         if self.dev.is_finite() && self.jump_t != Some(self.t) {
             let usual = if self.dev_ms > 0.0 { self.dev_ms.sqrt() } else { DEV0_M };
-            self.dev_ms = learn_ms(self.dev_ms, self.dev, usual, w_fast);
+            self.dev_ms = learn_ms(self.dev_ms, self.dev, usual, w);
         }
         if !(self.last_span <= 1.5 * SPAN_S) || self.jumped() {
             return;
@@ -421,7 +406,8 @@ impl RampTest {
         let sigma = [self.sigma(0), self.sigma(1)];
         learn_axes(&mut self.ms, &self.last, sigma, w);
         let sigma = [self.fast_sigma(0), self.fast_sigma(1)];
-        learn_axes(&mut self.fast_ms, &self.fast_last, sigma, w_fast);
+        let w = (self.dt / (self.t - SPAN_S).clamp(FAST_START_S, TAU_S)).fmin(1.0);
+        learn_axes(&mut self.fast_ms, &self.fast_last, sigma, w);
     }
 }
 
