@@ -861,9 +861,6 @@ const DRAG_RETURN_NEW: f64 = 0.6;
 const DRAG_RETURN_MIN_AGE_S: f64 = 5.0;
 
 impl Residuals {
-    /// The jump at this fix looks like the return from a drag-off the
-    /// filter followed (see [`DRAG_RETURN_Z`]): true fix back, re-anchor on
-    /// it. `flown`: time flown with the filter running, s.
     /// The horizontal fix jumped at this epoch: its residual moved by more
     /// than `track::NEAR` of σ_Δ (`sigma_pos`, m), the epoch-to-epoch
     /// change's σ, since the previous epoch.
@@ -872,6 +869,9 @@ impl Residuals {
         ((self.pin.nu[0] - self.prev_r[0]) / sigma_pos[0]).hypot((self.pin.nu[1] - self.prev_r[1]) / sigma_pos[1]) > crate::track::NEAR
     }
 
+    /// The jump at this fix looks like the return from a drag-off the
+    /// filter followed (see [`DRAG_RETURN_Z`]): true fix back, re-anchor on
+    /// it. `flown`: time flown with the filter running, s.
     fn drag_returned(&self, flown: f64, track_jump: Option<[f64; 3]>, sigma_dv: [f64; 3]) -> bool {
         let (Some(vin), Some(gps_jump)) = (&self.vin, track_jump) else { return false };
         let p = &self.pin.nu;
@@ -2845,7 +2845,7 @@ impl Detector {
             res: &res,
             sigma_pos,
             on_track: self.consistency.track.on_track(),
-            sigma_track: self.consistency.track.sigmas(),
+            sigma_track,
             baro_off: self.consistency.baro_still_off(),
         };
         let pos_before = self.episode.withheld.gps_pos();

@@ -1,8 +1,8 @@
 //! Helpers shared by the native integration tests: the battery regression
 //! tests and the real-log tests. Each test file uses some of them.
 #![allow(dead_code)]
-use navguard::battery::{self, Flight};
-use navguard::{Config, Detector};
+use navguard::battery::{self, Flight, FlightResult};
+use navguard::Config;
 
 /// GPS epochs flagged in the `len` s after the flight's first fault ends,
 /// and the GPS epochs in that span (default config).
@@ -12,22 +12,22 @@ pub fn flagged_after(f: &Flight, len: f64) -> (usize, usize) {
 
 /// As `flagged_after`, after the flight's fault `i`.
 pub fn flagged_after_fault(f: &Flight, i: usize, len: f64) -> (usize, usize) {
-    let ft = f.faults[i];
-    let mut det = Detector::new(Config::default()).unwrap();
-    let after: Vec<u8> = battery::simulate(f)
-        .iter()
-        .map(|s| (s, det.push(s).unwrap().status))
-        .filter(|(s, _)| !s.label.is_nan() && s.t >= ft.end_log && s.t < ft.end_log + len)
-        .map(|(_, st)| st)
-        .collect();
+    after_fault(&battery::run(f, &Config::default()).unwrap(), i, len)
+}
+
+/// In a run `r`: its GPS epochs flagged in the `len` s after fault `i`
+/// ends, and its GPS epochs in that span.
+fn after_fault(r: &FlightResult, i: usize, len: f64) -> (usize, usize) {
+    let end = r.flight.faults[i].end_log;
+    let after: Vec<u8> = r.epochs.iter().filter(|e| e.t >= end && e.t < end + len).map(|e| e.status).collect();
     (after.iter().filter(|st| **st != 0).count(), after.len())
 }
 
 /// The share of the flight's first fault flagged, and the epochs flagged
-/// in the `len` s after it, of how many (default config).
+/// in the `len` s after it, of how many (default config, one run).
 pub fn share_and_after(f: &Flight, len: f64) -> (f64, usize, usize) {
     let r = battery::run(f, &Config::default()).unwrap();
-    let (n, of) = flagged_after(f, len);
+    let (n, of) = after_fault(&r, 0, len);
     (r.events[0].share, n, of)
 }
 
