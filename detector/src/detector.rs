@@ -1363,7 +1363,7 @@ impl Consistency {
         let (v1, v0) = if vup.is_finite() && vup0.is_finite() { (vup, vup0) } else { let c = (self.alt_int - alt0) / dt; (c, c) };
         self.baro_dop_level.step(dt, [b, 0.0, 0.0], [v1, 0.0, 0.0], [v0, 0.0, 0.0]);
         let level = [self.baro_gps_level.level(), self.baro_dop_level.level()];
-        let motion = Motion { speed2: v.map_or(f64::NAN, |v| v[0] * v[0] + v[1] * v[1]), climb: v1, height: -y[2] };
+        let motion = Motion { speed2: v.map_or(f64::NAN, |v| v[0] * v[0] + v[1] * v[1]), climb: v1, height: -y[2], v_ne: v.map_or([f64::NAN; 2], |v| [v[0], v[1]]) };
         for lv in [&mut self.baro_gps_level, &mut self.baro_dop_level] {
             lv.set_motion([motion.speed2, motion.climb]);
         }

@@ -82,8 +82,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// (`ramp::RampTest::fast_stat`). 28: the IMU tests' learning bound
 /// (`LagTest::learn_below`) and the bias estimate an IMU episode rolls the
 /// filter back to (`Detector::bias_calm`). 29: a position episode opened
-/// on a step's onset (`Episode::fresh`).
-pub const VERSION: u32 = 29;
+/// on a step's onset (`Episode::fresh`). 30: the horizontal ground
+/// velocity in the baro drift test's motion (`window::Motion::v_ne`).
+pub const VERSION: u32 = 30;
 
 #[derive(Clone)]
 struct Header {

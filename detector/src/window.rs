@@ -41,6 +41,8 @@ pub struct Motion {
     pub climb: f64,
     /// Height above the first fix, m.
     pub height: f64,
+    /// Horizontal ground velocity (north, east), m/s.
+    pub v_ne: [f64; 2],
 }
 
 /// One entry: true s, the level's components (m), the motion.
@@ -223,7 +225,7 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(Motion { speed2, climb, height });
+    impl_codec!(Motion { speed2, climb, height, v_ne });
     impl_codec!(Entry { t, x, motion });
     impl_codec!(Window { ring, recent });
     impl_codec!(RecentMax { value, t });
