@@ -83,7 +83,8 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// (`LagTest::learn_below`) and the bias estimate an IMU episode rolls the
 /// filter back to (`Detector::bias_calm`). 29: a position episode opened
 /// on a step's onset (`Episode::fresh`). 30: the horizontal ground
-/// velocity in the baro drift test's motion (`window::Motion::v_ne`).
+/// velocity in the baro drift test's motion (`window::Motion::v_ne`) and
+/// its pending GPS return (`DriftTest::near_before`).
 pub const VERSION: u32 = 30;
 
 #[derive(Clone)]
