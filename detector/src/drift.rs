@@ -504,10 +504,11 @@ mod tests {
     fn a_drift_the_doppler_integral_sees_is_called_on_a_gps_altitude_that_only_confirms_it() {
         // From 40 s the baro leaves the Doppler integral at 0.25 m/s and the
         // GPS altitude (which wanders too) by 0.15 m/s: at 70 s the changes
-        // over the window are 7.5 m and 4.5 m less the smoothing's lag,
-        // above 3σ and below 2σ of the GPS altitude's (learnt from the calm
-        // 40 s before). The GPS altitude, at 1.5–2σ of the same sign,
-        // confirms the drift; it would not have reached `DRIFT_Z` alone.
+        // over the window, 7.5 m and 4.5 m less the smoothing's lag, are
+        // 3.6σ of the Doppler integral and 1.8σ of the GPS altitude (σ
+        // learnt from the calm 40 s before). The GPS altitude, 1.8σ off in
+        // the same sense, confirms the drift; under the old rule, which
+        // needed `DRIFT_Z` of both, it was not one.
         let mut d = DriftTest::default();
         let s = run(&mut d, 0.0, 701, 10.0, &|t| {
             let x = (t - 40.0).max(0.0);
@@ -552,6 +553,7 @@ mod tests {
             }
             worst
         };
+        // 0.03 and 4.0.
         assert!(worst(true) < 1.0, "{}", worst(true));
         // The same error with a velocity that did not turn is a drift.
         assert!(worst(false) >= DRIFT_Z, "{}", worst(false));
