@@ -170,6 +170,13 @@ pub struct DriftTest {
     near_before: bool,
 }
 
+/// The drift statistic from the two changes in σ (GPS altitude, Doppler
+/// integral; signed): the Doppler integral's, confirmed by the GPS
+/// altitude's counted `GPS_CONFIRM` times, when they agree in sense; else 0.
+fn confirmed(z: [f64; 2]) -> f64 {
+    if z[0] * z[1] > 0.0 { (GPS_CONFIRM * z[0].abs()).fmin(z[1].abs()) } else { 0.0 }
+}
+
 /// The change of both levels from `a` to `b` times `scale`, net of the
 /// motion allowance (its sign kept, 0 inside the allowance).
 fn net_change(a: &Entry, b: &Entry, scale: f64) -> [f64; 2] {
@@ -249,8 +256,10 @@ impl DriftTest {
         // The recent change, scaled to the window (what the rate of the
         // last `RECENT_S` gives over `SPAN_S`).
         let recent = r0.map_or([f64::NAN; 2], |r0| net_change(&r0, &e, SPAN_S / (t - r0.t)));
-        let z: [f64; 2] = core::array::from_fn(|k| self.last[k].abs() / self.sigma(k));
-        let full = if self.last[0] * self.last[1] > 0.0 { (GPS_CONFIRM * z[0]).fmin(z[1]) } else { 0.0 };
+        let sg = [self.sigma(0), self.sigma(1)];
+        let zs: [f64; 2] = core::array::from_fn(|k| self.last[k] / sg[k]);
+        let z = zs.map(f64::abs);
+        let full = confirmed(zs);
         if self.judging {
             // Judged from the level before the drift until the baro is back
             // on it (by either reference). The GPS altitude's return after a
@@ -263,7 +272,7 @@ impl DriftTest {
             // within a second, twice, tune #126's flagged share fell from
             // 69% to 51%, and tune #1471's (a 10 Hz receiver with 2 m of
             // vertical noise a fix) from 54% to 23%.
-            let z_raw = net_change(&e0, &raw, 1.0)[0].abs() / self.sigma(0);
+            let z_raw = net_change(&e0, &raw, 1.0)[0].abs() / sg[0];
             let near = z_raw < RELEASE_Z && z[0] - z_raw >= RELEASE_Z && z[1] >= DRIFT_Z;
             let jumped_back = near && self.near_before;
             self.near_before = near;
@@ -277,8 +286,7 @@ impl DriftTest {
             // have fallen below the call too (a fixed wing's drift called
             // on a leg and released in the next turn restarted the window
             // and went unjudged for 30 s: tune #1471).
-            let g: [f64; 2] = core::array::from_fn(|k| (e.x[k] - e0.x[k]) / self.sigma(k));
-            let gross = if g[0] * g[1] > 0.0 { (GPS_CONFIRM * g[0].abs()).fmin(g[1].abs()) } else { 0.0 };
+            let gross = confirmed(core::array::from_fn(|k| (e.x[k] - e0.x[k]) / sg[k]));
             if (full < RELEASE_Z && gross < DRIFT_Z) || jumped_back || held {
                 self.judging = false;
                 // Back by a jump, or by the smoothed altitude (the weighted
@@ -290,7 +298,7 @@ impl DriftTest {
             }
             return full;
         }
-        let zr: [f64; 2] = core::array::from_fn(|k| recent[k].abs() / self.sigma(k));
+        let zr: [f64; 2] = core::array::from_fn(|k| recent[k].abs() / sg[k]);
         let going_on = (0..2).all(|k| recent[k] * self.last[k] > 0.0);
         let stat = if going_on { full.fmin(GPS_CONFIRM * zr[0]).fmin(zr[1]) } else { 0.0 };
         self.judging = stat >= DRIFT_Z;
