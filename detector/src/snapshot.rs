@@ -85,7 +85,7 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// on a step's onset (`Episode::fresh`). 30: the horizontal ground
 /// velocity in the baro drift test's motion (`window::Motion::v_ne`) and
 /// its pending GPS return (`DriftTest::near_before`).
-pub const VERSION: u32 = 30;
+pub const VERSION: u32 = 31;
 
 #[derive(Clone)]
 struct Header {
