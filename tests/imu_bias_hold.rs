@@ -12,16 +12,8 @@
 
 mod common;
 
-use common::flagged_after;
-use navguard::battery::{self, Axis, Flight, Split};
-use navguard::Config;
-
-/// The flight's first fault, checked to be a horizontal accelerometer
-/// bias, run with the default config: the share of it flagged.
-fn bias_share(f: &Flight) -> f64 {
-    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("accel-bias", Axis::Horizontal));
-    battery::run(f, &Config::default()).unwrap().events[0].share
-}
+use common::{bias_share, flagged_after};
+use navguard::battery::{Flight, Split};
 
 /// Regression: tune #916 (a 0.69 m/s² horizontal bias from 19 s to 123 s
 /// of an aggressive flight). It began before the test armed, and its

@@ -1030,10 +1030,12 @@ impl LagTest<2> {
             }
         }
         let stt = stt.fmax(f64::MIN_POSITIVE);
-        // Sums of squares explained: by the mean and the line, and by the
-        // best split into the first `k` entries and the rest.
+        // Sums of squares explained: by the mean and the line, and by a
+        // split into the first `k` entries and the rest, `s1²/k +
+        // s2²/(n−k)` summed over the axes; compared multiplied through by
+        // `k(n−k)`, so the scan divides nothing (it runs at every epoch).
         let line = (stz[0] * stz[0] + stz[1] * stz[1]) / stt + (sz[0] * sz[0] + sz[1] * sz[1]) / n;
-        let (mut s1, mut step) = ([0.0; 2], 0.0f64);
+        let (mut s1, mut step) = ([0.0; 2], false);
         for k in 1..m {
             let z = at(k - 1).1;
             let kf = k as f64;
@@ -1041,11 +1043,14 @@ impl LagTest<2> {
             for a in 0..2 {
                 s1[a] += z[a];
                 let s2 = sz[a] - s1[a];
-                e += s1[a] * s1[a] / kf + s2 * s2 / (n - kf);
+                e += s1[a] * s1[a] * (n - kf) + s2 * s2 * kf;
             }
-            step = step.fmax(e);
+            if e > line * kf * (n - kf) {
+                step = true;
+                break;
+            }
         }
-        ([stz[0] / stt, stz[1] / stt], step > line)
+        ([stz[0] / stt, stz[1] / stt], step)
     }
 }
 

@@ -1,7 +1,7 @@
 //! Helpers shared by the native integration tests: the battery regression
 //! tests and the real-log tests. Each test file uses some of them.
 #![allow(dead_code)]
-use navguard::battery::{self, Flight, FlightResult};
+use navguard::battery::{self, Axis, Flight, FlightResult};
 use navguard::Config;
 
 /// GPS epochs flagged in the `len` s after the flight's first fault ends,
@@ -29,6 +29,13 @@ pub fn share_and_after(f: &Flight, len: f64) -> (f64, usize, usize) {
     let r = battery::run(f, &Config::default()).unwrap();
     let (n, of) = after_fault(&r, 0, len);
     (r.events[0].share, n, of)
+}
+
+/// The flight's first fault, checked to be a horizontal accelerometer
+/// bias, run with the default config: the share of it flagged.
+pub fn bias_share(f: &Flight) -> f64 {
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("accel-bias", Axis::Horizontal));
+    battery::run(f, &Config::default()).unwrap().events[0].share
 }
 
 /// The battery flight `index` of `split`, whose first fault is of kind
