@@ -719,24 +719,31 @@ impl<const D: usize> LagTest<D> {
     /// the newest one at least `dt` older, baseline removed, no hold
     /// scaling); NaN when the window holds no such pair.
     pub fn recent(&self, dt: f64) -> f64 {
-        if self.len < 2 {
+        let Some((k, span)) = self.newest_spanning(dt) else {
             return f64::NAN;
-        }
+        };
         let cap = self.ring.len();
-        let (tn, zn) = self.ring[(self.head + cap - 1) % cap];
+        let (zn, z0) = (self.ring[(self.head + cap - 1) % cap].1, self.ring[(self.head + cap - k) % cap].1);
+        let mut z2 = 0.0;
+        for a in 0..D {
+            let z = (zn[a] - z0[a] - self.rate[a] * span) / self.sigma(a);
+            z2 += z * z;
+        }
+        (z2 / D as f64).sqrt()
+    }
+
+    /// The fewest newest entries (≥ 2) that span at least `dt` s, and
+    /// their span; None when the window holds no such run.
+    fn newest_spanning(&self, dt: f64) -> Option<(usize, f64)> {
+        let cap = self.ring.len();
+        let tn = self.ring[(self.head + cap - 1) % cap].0;
         for k in 2..=self.len {
-            let (t0, z0) = self.ring[(self.head + cap - k) % cap];
-            if tn - t0 >= dt {
-                let span = tn - t0;
-                let mut z2 = 0.0;
-                for a in 0..D {
-                    let z = (zn[a] - z0[a] - self.rate[a] * span) / self.sigma(a);
-                    z2 += z * z;
-                }
-                return (z2 / D as f64).sqrt();
+            let span = tn - self.ring[(self.head + cap - k) % cap].0;
+            if span >= dt {
+                return Some((k, span));
             }
         }
-        f64::NAN
+        None
     }
 
     /// Bound the baseline rate's magnitude by `max` (units/s).
@@ -990,18 +997,13 @@ impl LagTest<2> {
     /// s, on the window's σ grown as a slope's error grows over fewer
     /// entries (`sqrt(span/dt)`).
     pub fn recent_by_slope(&self, dt: f64) -> f64 {
-        let cap = self.ring.len();
-        let tn = self.ring[(self.head + cap - 1) % cap].0;
-        for k in 2..=self.len {
-            let span = tn - self.ring[(self.head + cap - k) % cap].0;
-            if span >= dt {
-                let (slope, _) = self.fit(k);
-                let grow = (self.span / span).sqrt();
-                let z2: f64 = (0..2).map(|a| ((slope[a] - self.rate[a]) * span / (self.sigma(a) * grow)).powi(2)).sum();
-                return (z2 / 2.0).sqrt();
-            }
-        }
-        f64::NAN
+        let Some((k, span)) = self.newest_spanning(dt) else {
+            return f64::NAN;
+        };
+        let (slope, _) = self.fit(k);
+        let grow = (self.span / span).sqrt();
+        let z2: f64 = (0..2).map(|a| ((slope[a] - self.rate[a]) * span / (self.sigma(a) * grow)).powi(2)).sum();
+        (z2 / 2.0).sqrt()
     }
 
     /// Least-squares slope of the newest `m` (≥ 2) entries per axis
@@ -1925,9 +1927,10 @@ mod tests {
         assert_eq!([e.imu.learnt(), e.imu_v.learnt()], [0, 0]);
         assert_eq!([e.imu.rate[0], e.imu_v.rate[0]], [0.0, 0.0]);
         assert_eq!([e.imu.sigma(0), e.imu_v.sigma(0)], [IMU_SIGMA0, IMU_SIGMA0]);
-        // 3 s and 6 s windows of 0.8 m/s² over σ₀ = 0.5 m/s: 4.8 on each
+        // 3 s and 6 s windows of 0.8 m/s² over σ₀ = 0.5 m/s (the horizontal
+        // read on its slope, as the episode reads it): 4.8 on each
         // horizontal axis, 9.6 on the vertical one.
-        assert_abs_diff_eq!(e.imu.recent(IMU_SPAN), 4.8, epsilon = 1e-9);
+        assert_abs_diff_eq!(e.imu.recent_by_slope(IMU_SPAN), 4.8, epsilon = 1e-9);
         assert_abs_diff_eq!(e.imu_v.recent(IMU_V_SPAN), 9.6, epsilon = 1e-9);
         // The same ramp on a test without the gate is learnt as its
         // baseline rate (unbounded here).
