@@ -100,10 +100,12 @@ fn the_take_off_velocity_of_a_receiver_that_says_it_is_poor_is_not_flagged() {
 /// velocity noise. With the velocity tests scaled on the fixes the
 /// receiver declared degraded, 294 and 99 false-positive epochs followed
 /// (1 and 3 without the claims); the declared fixes are the receiver's
-/// word, not the tests', so they are not scaled.
+/// word, not the tests', so they are not scaled. #680 has 2 since session
+/// 24, when the short mean off the velocity track (`tests/mean_hold.rs`)
+/// came in: one more epoch, 5 s before the degraded fixes begin.
 #[test]
 fn a_declared_degraded_fix_is_not_scaled_by_its_speed_claim() {
-    for (i, most) in [(680, 1), (451, 3)] {
+    for (i, most) in [(680, 2), (451, 3)] {
         let f = Flight::draw(Split::Tune, i).with_speed_claims();
         assert_eq!(f.faults[0].kind.name(), "degraded");
         let r = battery::run(&f, &Config::default()).unwrap();

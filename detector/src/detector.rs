@@ -319,6 +319,9 @@ const RETURN_MIN_SIGMAS: f64 = 6.0;
 /// that undoes it end a fault, and a 15.6 m vertical step under a 1 Hz
 /// receiver is 5.4 σ_Δ (battery tune #551).
 const KEEP_MIN_SIGMAS: f64 = 4.0;
+/// An episode opened on the fix's short mean (`Episode::mean_hold`) holds
+/// while that mean stays this many of its σ off the velocity track.
+const MEAN_KEEP: f64 = 4.0;
 /// A position-only episode's offset (`Episode::off_sigmas`) into the
 /// position group's R: `KEEP_MIN_SIGMAS` lands just above the ANFIS
 /// boundary (R ≈ 2.55), so an offset the episode's end would keep holds
@@ -946,6 +949,8 @@ struct EpochState {
     imu_dense: bool,
     /// The receiver's speed accuracy claim against its usual one (≥ 1).
     speed_claim: f64,
+    /// A position offset is accepted (`Episode::accepted`).
+    accepted: bool,
 }
 
 /// Running integrals that the filter-independent consistency tests (see
@@ -1602,6 +1607,12 @@ impl Consistency {
         // receiver calls degraded, like the ramp test.
         if !e.declared {
             out.fold(0, self.track.departed() * TRACK_R_SCALE);
+            // Its short mean's onset (`VelocityTrack::mean_departure`),
+            // unless an offset was accepted: the track has not learnt it,
+            // and the fault's end undoes it (`Episode::undone`).
+            if !e.accepted {
+                out.fold(0, self.track.mean_departure() * TRACK_R_SCALE);
+            }
         }
         // The baro's level: condemned only when it left both references
         // (NaN, not judged, unless both are); and its drift over a long
@@ -1973,6 +1984,10 @@ struct Episode {
     /// fix's offset off the coasted filter is then the fault's evidence
     /// (`Episode::held`).
     fresh: bool,
+    /// The episode opened on the fix's short mean leaving its velocity
+    /// track (`VelocityTrack::mean_departure`): it holds while the mean
+    /// stays off.
+    mean_hold: bool,
 }
 
 /// What the episode stage decided at a GPS epoch.
@@ -2737,7 +2752,7 @@ impl Detector {
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
-        let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim };
+        let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim, accepted: self.episode.accepted.is_some() };
         let (mut ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, epoch);
         // A position-only episode that opened on a step's onset lasts while
         // the fix stays off the coasted filter (`Episode::held`): the
@@ -2747,7 +2762,12 @@ impl Detector {
         let sigma_pos: [f64; 3] = core::array::from_fn(|a| self.ind.sigma(a));
         let sigma_coast = core::array::from_fn(|a| self.ind.coast_sigma(a));
         let sigma_track = self.consistency.track.sigmas();
-        let held = self.episode.held(&res.pin.nu, &sigma_coast, &sigma_track);
+        // An episode opened on the short mean's onset holds on the mean:
+        // a noisy fast receiver's step is a few of its per-fix σ.
+        let mut held = self.episode.held(&res.pin.nu, &sigma_coast, &sigma_track);
+        if self.episode.mean_hold && self.episode.withheld.gps_pos() {
+            held = held.fmax(self.consistency.track.mean_sigmas() * (2.8 / MEAN_KEEP));
+        }
         ind.fold(0, held);
         self.ind.fold_unfolded(held);
         self.last_ind = ind;
@@ -2861,6 +2881,19 @@ impl Detector {
         self.consistency.arm_drag_end(fix.t, opened_on_position, &step);
         if opened_on_position {
             self.episode.fresh = step_onset(&res.pin.nu, self.consistency.track.jump(), &sigma_coast, &sigma_track);
+            // Not inside an episode: its position jump is read by the
+            // episode's own return and drag-end tests.
+            self.episode.mean_hold = !was_active && self.consistency.track.mean_departure() >= 1.0;
+        }
+        // The hold ends with the episode, or when it coasts out: the
+        // offset is then accepted (`Episode::accepted`).
+        if !step.fault || step.reset {
+            self.episode.mean_hold = false;
+        }
+        // A jump read as a fault's end (a restart, or the episode ended on
+        // it) is not a new fault's onset.
+        if restart || (was_active && !step.fault) {
+            self.consistency.track.settle_mean();
         }
         if !step.fault && !step.reset {
             self.consistency.track.learn();
@@ -3693,6 +3726,6 @@ mod codec_impls {
     impl_codec!(ClockRun { t0, g0, n, mx, my, cxx, cxy, cyy, last });
     impl_codec!(Methods { prev_nu, maha, baro_inn, pool });
     impl_codec!(Withheld { groups, baro_calm });
-    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted, long_coast, fresh });
+    impl_codec!(Episode { active, imu, imu_calm, coast_start, calm_epochs, receiver_lost, normal_run, withheld, accepted, long_coast, fresh, mean_hold });
     impl_codec!(Learning { anfis, d1, d2, new_faults, d0_x, d0_y } skip { train_x, train_y, cost });
 }

@@ -84,8 +84,11 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// filter back to (`Detector::bias_calm`). 29: a position episode opened
 /// on a step's onset (`Episode::fresh`). 30: the horizontal ground
 /// velocity in the baro drift test's motion (`window::Motion::v_ne`) and
-/// its pending GPS return (`DriftTest::near_before`).
-pub const VERSION: u32 = 31;
+/// its pending GPS return (`DriftTest::near_before`). 31: the IMU test
+/// judged by its window's slope (`LagTest::push_by_slope`). 32: the
+/// tracks' short mean (`VelocityTrack::dm`, `ms_mean`, `since_calm`) and
+/// the episode's hold on it (`Episode::mean_hold`).
+pub const VERSION: u32 = 32;
 
 #[derive(Clone)]
 struct Header {

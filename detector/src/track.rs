@@ -19,6 +19,15 @@
 //! position fault's onset, folded into the position group's R whatever the
 //! filter's residuals say.
 //!
+//! Since session 24 the track also keeps a short mean of `d` (time
+//! constant `MEAN_TAU_S`) with its own σ learnt on normal epochs: a fast
+//! receiver's white noise averages down in it, so a step a few per-fix σ
+//! high stands out (the 10 m step check's instance 3: a 10 Hz receiver of
+//! 2.55 m σ, its step 3.9 per-fix σ and 2 of 600 epochs flagged; 12 σ of
+//! the mean). `mean_departure` is an onset only (the mean left `NEAR` σ
+//! within `ONSET_S`), so a slow wander never calls; the detector holds the
+//! episode it opens while the mean stays off (`Episode::mean_hold`).
+//!
 //! The detector also uses it on one axis (the others fed zeros, which stay
 //! at zero departure) for the baro's level: against the GPS altitude (no
 //! velocity to integrate) and against the GPS vertical velocity integrated.
@@ -29,6 +38,18 @@ use serde::{Deserialize, Serialize};
 const TAU_S: f64 = 60.0;
 /// Track time before the baseline is trusted, s.
 const MIN_AGE_S: f64 = 30.0;
+/// Time constant of `d`'s short mean, true s (see `mean_departure`).
+const MEAN_TAU_S: f64 = 0.5;
+/// The short mean's call, in σ of that mean.
+pub const MEAN_Z: f64 = 5.0;
+/// The short mean is an onset only this long after it was within `NEAR`
+/// σ, true s.
+const ONSET_S: f64 = 2.0;
+/// Fix interval above which the short mean is not judged, s: below about
+/// 4 Hz it averages too few fixes to add to the per-fix `departed`, and a
+/// Gauss–Markov receiver's wander passed for onsets (battery tune #326, a
+/// 1 Hz receiver: 41 false-positive epochs; #696, 2 Hz: 49).
+const MEAN_MAX_DT_S: f64 = 0.25;
 /// Floor of σ per axis, m: a centimetre-grade receiver's wander is not a
 /// scale below which a jump of a metre means nothing.
 const SIGMA_FLOOR_M: f64 = 0.3;
@@ -109,6 +130,13 @@ pub struct VelocityTrack {
     /// `MIN_AGE_S` (the GPS position's track: see `back_to_origin`). Kept
     /// across `clear`.
     quick_origin: bool,
+    /// `d`'s short mean (time constant `MEAN_TAU_S`), m, and the learnt
+    /// mean square of its offset from the baseline per axis, m² (learnt
+    /// like `ms`, winsorised at `LEARN_SIGMAS`).
+    dm: [f64; 3],
+    ms_mean: [f64; 3],
+    /// Track time since the short mean was last within `NEAR` σ, s.
+    since_calm: f64,
 }
 
 impl VelocityTrack {
@@ -132,6 +160,8 @@ impl VelocityTrack {
             self.integral = y;
             self.base = [0.0; 3];
             self.ms = [SIGMA0_M * SIGMA0_M; 3];
+            self.ms_mean = [SIGMA0_M * SIGMA0_M; 3];
+            self.dm = [0.0; 3];
             self.d = Some([0.0; 3]);
             return;
         };
@@ -140,7 +170,13 @@ impl VelocityTrack {
         }
         self.dt = dt;
         self.d_prev = self.d;
-        self.d = Some(core::array::from_fn(|a| y[a] - self.integral[a]));
+        let d: [f64; 3] = core::array::from_fn(|a| y[a] - self.integral[a]);
+        let k = dt / (MEAN_TAU_S + dt);
+        for a in 0..3 {
+            self.dm[a] += k * (d[a] - self.dm[a]);
+        }
+        self.d = Some(d);
+        self.since_calm = if self.mean_sigmas() < NEAR { 0.0 } else { self.since_calm + dt };
         self.back_to_origin();
     }
 
@@ -268,6 +304,8 @@ impl VelocityTrack {
             let e = d[a] - self.base[a];
             self.base[a] += wb * e;
             self.ms[a] += w * ((e * e).fmin(cap * self.ms[a].fmax(SIGMA_FLOOR_M * SIGMA_FLOOR_M)) - self.ms[a]);
+            let em = self.dm[a] - self.base[a];
+            self.ms_mean[a] += w * ((em * em).fmin(LEARN_SIGMAS * LEARN_SIGMAS * self.ms_mean[a].fmax(SIGMA_FLOOR_M * SIGMA_FLOOR_M)) - self.ms_mean[a]);
         }
         if outlier {
             return;
@@ -351,6 +389,9 @@ impl VelocityTrack {
     /// held still through it): move the baseline with it, so the fixes
     /// after it are not read as outlying.
     pub fn rebase(&mut self) {
+        if let Some(d) = self.d {
+            self.dm = d;
+        }
         if let Some(j) = self.jump() {
             for a in 0..3 {
                 self.base[a] += j[a];
@@ -360,6 +401,38 @@ impl VelocityTrack {
             }
             self.outlying = 0.0;
         }
+    }
+
+    /// `d`'s short mean off the baseline, in σ of that mean learnt on
+    /// normal epochs (the axes combined), over `MEAN_Z`: 1 at the call.
+    /// NaN until the baseline has lived `MIN_AGE_S`, once the mean has been
+    /// off `NEAR` σ for longer than `ONSET_S` (an onset, not a level), and
+    /// on a receiver slower than `MEAN_MAX_DT_S`.
+    pub fn mean_departure(&self) -> f64 {
+        if self.since_calm > ONSET_S || !(self.dt < MEAN_MAX_DT_S) {
+            return f64::NAN;
+        }
+        self.mean_sigmas() / MEAN_Z
+    }
+
+    /// The short mean's departure is no onset until it is calm again: the
+    /// jump that moved it was read as a fault's end (battery tune #631: a
+    /// 1 m/s vertical drag-off's 23 m return, which the track keeps as a
+    /// jump of `d` until it re-learns its baseline, held for 60 s).
+    pub fn settle_mean(&mut self) {
+        self.since_calm = ONSET_S + 1.0;
+    }
+
+    /// `d`'s short mean off the baseline in σ of that mean (the axes
+    /// combined); NaN until the baseline has lived `MIN_AGE_S`. Built for
+    /// size, not inlined: once per track per GPS epoch (issue 15's budget).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    #[inline(never)]
+    pub fn mean_sigmas(&self) -> f64 {
+        if self.d.is_none() || self.age < MIN_AGE_S {
+            return f64::NAN;
+        }
+        (0..3).map(|a| ((self.dm[a] - self.base[a]) / self.ms_mean[a].sqrt().fmax(SIGMA_FLOOR_M)).powi(2)).sum::<f64>().sqrt()
     }
 
     /// `d` (m, NED): the position off its velocity integrated since the
@@ -440,6 +513,7 @@ impl VelocityTrack {
         if let (Some(d), true) = (self.d, a < 3) {
             self.origin[a] += d[a] - self.base[a];
             self.base[a] = d[a];
+            self.dm[a] = d[a];
             self.outlying = 0.0;
         }
     }
@@ -485,6 +559,39 @@ mod tests {
                 r
             })
             .collect()
+    }
+
+    /// Under white noise of 2.5 m per fix at 10 Hz, a 10 m step east is
+    /// 4 σ of one fix (never `FAR`, so `departed` stays silent) and about
+    /// 13 σ of the short mean, which calls it within half a second; over
+    /// 10 minutes of the noise alone the mean calls nothing.
+    #[test]
+    fn the_short_mean_calls_a_step_a_single_fix_cannot() {
+        let mut rng = crate::rng::Rng::new(24);
+        let mut tr = VelocityTrack::quick();
+        let mut noise = |off: f64| [2.5 * rng.normal(), off + 2.5 * rng.normal(), 5.0 * rng.normal()];
+        let mut calls = 0;
+        for _ in 0..6000 {
+            tr.step(0.1, noise(0.0), [0.0; 3], [0.0; 3]);
+            calls += (tr.mean_departure() >= 1.0) as u32;
+            tr.learn();
+        }
+        assert_eq!(calls, 0);
+        let (mut first, mut per_fix) = (None, 0);
+        for i in 0..10 {
+            tr.step(0.1, noise(10.0), [0.0; 3], [0.0; 3]);
+            per_fix += (tr.departed() >= 1.0) as u32;
+            if first.is_none() && tr.mean_departure() >= 1.0 {
+                first = Some(i);
+            }
+        }
+        let first = first.expect("the mean never called the step");
+        assert!(first <= 5 && per_fix == 0, "called at the step's fix {first}; {per_fix} per-fix calls");
+        assert!(tr.mean_sigmas() > 8.0, "{:.1} σ of the mean", tr.mean_sigmas());
+        // Settled (the jump read as a fault's end), it is no onset.
+        tr.settle_mean();
+        tr.step(0.1, noise(10.0), [0.0; 3], [0.0; 3]);
+        assert!(tr.mean_departure().is_nan());
     }
 
     #[test]
@@ -711,5 +818,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy, origin, origin_age, at_origin, ms_step, quick_origin });
+    impl_codec!(VelocityTrack { integral, d, d_prev, base, ms, age, outlying, dt, motion, motion_base, mxx, mxy, origin, origin_age, at_origin, ms_step, quick_origin, dm, ms_mean, since_calm });
 }
