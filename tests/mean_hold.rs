@@ -56,3 +56,17 @@ fn a_slow_receivers_wander_is_not_judged_on_its_mean() {
     let flagged = r.epochs.iter().filter(|e| e.status != 0).count();
     assert!(r.epochs.len() >= 400 && flagged == 0, "{flagged} of {} epochs flagged", r.epochs.len());
 }
+
+/// Regression: instance 1 of the 6 m vertical step check (survey, 10 Hz
+/// receiver, mixed noise σ 0.72 m). The step's first epochs opened and
+/// closed an episode before the mean called, and any episode's end
+/// muted the mean's onset as if the jump were a fault's end: 6% of the
+/// step flagged. Only a restart or the episode's own return mutes it now
+/// (`EpisodeStep::returned`): 40%.
+#[test]
+fn a_brief_first_episode_does_not_mute_the_mean() {
+    let f = battery::CHECKS[5].flight(5, 0);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].magnitude), ("step", 6.0));
+    let (share, _, _) = share_and_after(&f, 20.0);
+    assert!(share >= 0.35, "{:.0}% of the step flagged", 100.0 * share);
+}

@@ -1997,6 +1997,8 @@ struct EpisodeStep {
     fault: bool,
     /// Re-anchor the filter on this fix (coasted too long, or recovered).
     reset: bool,
+    /// The episode ended on the GPS's return (`Episode::returned`).
+    returned: bool,
 }
 
 impl Episode {
@@ -2059,7 +2061,7 @@ impl Episode {
         if !fault {
             self.ended_off_track(ev);
             self.normal_epoch(ev.baro_off);
-            return EpisodeStep { fault: false, reset: false };
+            return EpisodeStep { fault: false, reset: false, returned: false };
         }
         let start = *self.coast_start.get_or_insert(t);
         self.withheld.withhold(ev);
@@ -2079,7 +2081,7 @@ impl Episode {
         if coasted_out && !ended && self.withheld.gps_pos() && !self.receiver_lost && !self.imu {
             self.accepted = Some(ev.res.pin.nu);
         }
-        EpisodeStep { fault: !ended, reset: coasted_out || ended }
+        EpisodeStep { fault: !ended, reset: coasted_out || ended, returned }
     }
 
     /// A position-only episode that ended (a normal verdict, or recovered)
@@ -2890,9 +2892,12 @@ impl Detector {
         if !step.fault || step.reset {
             self.episode.mean_hold = false;
         }
-        // A jump read as a fault's end (a restart, or the episode ended on
-        // it) is not a new fault's onset.
-        if restart || (was_active && !step.fault) {
+        // A jump read as a fault's end (a restart, or the episode's own
+        // return) is not a new fault's onset. Not every episode's end: a
+        // step's first epochs may open and close an episode before the
+        // mean calls (the 6 m vertical step check's instances 1 and 6, 10
+        // and 20 Hz receivers: 6% of their epochs flagged, now 40% and 15%).
+        if restart || step.returned {
             self.consistency.track.settle_mean();
         }
         if !step.fault && !step.reset {
@@ -3399,22 +3404,22 @@ mod tests {
         let mut bad = clean();
         bad.r_group[0] = 10.0;
         bad.r_group[1] = 10.0;
-        assert_eq!(e.step(100.0, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: false });
-        assert_eq!(e.step(120.5, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: true });
+        assert_eq!(e.step(100.0, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: false, returned: false });
+        assert_eq!(e.step(120.5, true, &evidence(&bad), 20.0, false), EpisodeStep { fault: true, reset: true, returned: false });
         // Position only (the GPS velocity still aiding): judged for 60 s.
         let mut e = Episode::default();
         let mut pos = clean();
         pos.r_group[0] = 10.0;
-        assert_eq!(e.step(100.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false });
-        assert_eq!(e.step(159.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false });
-        assert_eq!(e.step(160.5, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: true });
+        assert_eq!(e.step(100.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false, returned: false });
+        assert_eq!(e.step(159.0, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: false, returned: false });
+        assert_eq!(e.step(160.5, true, &evidence(&pos), 20.0, false), EpisodeStep { fault: true, reset: true, returned: false });
         // Agreement for 5 epochs (and over 0.5 s): recovered, verdict normal.
         let mut e = Episode::default();
         for k in 0..4 {
             let st = e.step(10.0 + 0.2 * k as f64, true, &evidence(&ind), 20.0, false);
-            assert_eq!(st, EpisodeStep { fault: true, reset: false }, "epoch {k}");
+            assert_eq!(st, EpisodeStep { fault: true, reset: false, returned: false }, "epoch {k}");
         }
-        assert_eq!(e.step(10.8, true, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: true });
+        assert_eq!(e.step(10.8, true, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: true, returned: false });
         // A position-only episode keeps a large offset as the fault itself.
         let mut e = Episode::default();
         let mut step = clean();
@@ -3436,7 +3441,7 @@ mod tests {
         e.withheld.groups = [true, true, true];
         for k in 0..5 {
             assert!(e.receiver_lost, "epoch {k}");
-            assert_eq!(e.step(20.0, false, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: false });
+            assert_eq!(e.step(20.0, false, &evidence(&ind), 20.0, false), EpisodeStep { fault: false, reset: false, returned: false });
             assert_eq!((e.withheld.groups, e.coast_start), ([false; GROUPS], None));
         }
         assert!(!e.receiver_lost);
@@ -3462,25 +3467,25 @@ mod tests {
         let mut e = Episode::default();
         open(&mut e);
         let back = Evidence { res: residuals([0.0; 3], [10.0, 0.0, 0.0], [0.8, 0.3, 2.0]), ..evidence(&pos) };
-        assert_eq!(e.step(160.0, true, &back, 20.0, false), EpisodeStep { fault: false, reset: true });
+        assert_eq!(e.step(160.0, true, &back, 20.0, false), EpisodeStep { fault: false, reset: true, returned: true });
         // A jump that undoes a third of it, or overshoots to the other side
         // by as much, is no return.
         for now in [[6.7, 0.0, 0.0], [-6.0, 0.0, 0.0]] {
             let mut e = Episode::default();
             open(&mut e);
             let ev = Evidence { res: residuals([0.0; 3], [10.0, 0.0, 0.0], now), ..evidence(&pos) };
-            assert_eq!(e.step(160.0, true, &ev, 20.0, false), EpisodeStep { fault: true, reset: false }, "{now:?}");
+            assert_eq!(e.step(160.0, true, &ev, 20.0, false), EpisodeStep { fault: true, reset: false, returned: false }, "{now:?}");
         }
         // An offset within 6 σ_Δ of the reference is noise, not a step to undo.
         let mut e = Episode::default();
         open(&mut e);
         let small = Evidence { res: residuals([0.0; 3], [0.5, 0.0, 0.0], [0.0; 3]), ..evidence(&pos) };
-        assert_eq!(e.step(160.0, true, &small, 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(160.0, true, &small, 20.0, false), EpisodeStep { fault: true, reset: false, returned: false });
         // An IMU-only coast (receiver withheld) does not end on a jump: its
         // offset is the IMU's drift.
         let mut e = Episode { receiver_lost: true, ..Episode::default() };
         open(&mut e);
-        assert_eq!(e.step(110.0, true, &back, 20.0, false), EpisodeStep { fault: true, reset: false });
+        assert_eq!(e.step(110.0, true, &back, 20.0, false), EpisodeStep { fault: true, reset: false, returned: false });
     }
 
     #[test]

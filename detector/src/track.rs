@@ -416,7 +416,8 @@ impl VelocityTrack {
     }
 
     /// The short mean's departure is no onset until it is calm again: the
-    /// jump that moved it was read as a fault's end (battery tune #631: a
+    /// jump that moved it was read as a fault's end (the detector's
+    /// restart, or the episode's return; battery tune #631: a
     /// 1 m/s vertical drag-off's 23 m return, which the track keeps as a
     /// jump of `d` until it re-learns its baseline, held for 60 s).
     pub fn settle_mean(&mut self) {
