@@ -951,6 +951,8 @@ struct EpochState {
     speed_claim: f64,
     /// A position offset is accepted (`Episode::accepted`).
     accepted: bool,
+    /// The episode holds on the fix's short mean (`Episode::mean_hold`).
+    mean_hold: bool,
 }
 
 /// Running integrals that the filter-independent consistency tests (see
@@ -1394,7 +1396,13 @@ impl Consistency {
     /// they held, the fault ended: their baselines move to the fix, so the
     /// wander it left is not judged as a fault of its own.
     /// Also returns whether this fix was that return.
-    fn altitude_vote(&mut self, epv: f64) -> (f64, bool) {
+    ///
+    /// `may_return`: false inside an episode held on the short mean
+    /// (`Episode::mean_hold`), where one fix of a fast noisy receiver
+    /// comes back by half its offset by chance (the 6 m vertical step
+    /// check's instance 6, 20 Hz, 5σ a fix: re-based 3 s into its 30 s);
+    /// the mean says when the step ends.
+    fn altitude_vote(&mut self, epv: f64, may_return: bool) -> (f64, bool) {
         let (Some(b), Some(z)) = (self.baro_gps_level.offset(0), self.track.offset(2)) else {
             return (f64::NAN, false);
         };
@@ -1407,7 +1415,7 @@ impl Consistency {
         // Called at the last fix, and now back by more than half of it (or
         // past its baseline).
         let back = |now: f64, prev: f64| prev.abs() > VOTE_Z && (now * prev < 0.0 || now.abs() < VOTE_BACK * prev.abs());
-        if bp * zp > 0.0 && back(bn, bp) && back(zn, zp) {
+        if may_return && bp * zp > 0.0 && back(bn, bp) && back(zn, zp) {
             self.baro_gps_level.rebase_axis(0);
             self.track.rebase_axis(2);
             return (0.0, true);
@@ -1631,7 +1639,7 @@ impl Consistency {
         // vertical velocity integrated (the track's down axis). Two of three
         // agree, so the GPS position is condemned, not the baro; a baro
         // fault moves only the first, a vertical drag-off only the second.
-        let (alt, alt_back) = self.altitude_vote(fix.epv);
+        let (alt, alt_back) = self.altitude_vote(fix.epv, !e.mean_hold);
         out.fold(0, alt * VOTE_R_SCALE);
         // What these tests folded is the other tests' verdict, not the IMU's.
         for g in [0, 2] {
@@ -2754,7 +2762,7 @@ impl Detector {
         // rate that then flagged the 30 s after the ramp (tests/long_faults.rs).
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
-        let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim, accepted: self.episode.accepted.is_some() };
+        let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim, accepted: self.episode.accepted.is_some(), mean_hold: self.episode.mean_hold };
         let (mut ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, epoch);
         // A position-only episode that opened on a step's onset lasts while
         // the fix stays off the coasted filter (`Episode::held`): the
@@ -2804,7 +2812,12 @@ impl Detector {
         // the baro's level by chance (the paper flight's noise fault, seed
         // 2: 16 re-anchorings in its 15 s, two epochs missed at each).
         let vertical = vertical.filter(|&baro| baro || !res.jumped_h(&sigma_pos));
-        let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back || vertical == Some(false);
+        // Not the GPS altitude's return alone inside an episode held on
+        // the short mean: one fix of a fast noisy receiver lands back on
+        // the baro's level by chance (the 6 m vertical step check's
+        // instance 1, 10 Hz, 11 s into its step); the mean says when the
+        // step ends.
+        let gps_back = self.consistency.baro_drift.gps_returned() || self.consistency.ramp.returned() || alt_back || (vertical == Some(false) && !self.episode.mean_hold);
         // The baro back on both its levels, from beyond `FAR` σ to within
         // `NEAR` (see `track`): the end of a baro fault. The jump back is
         // in the baro's 6 s windows and its Δr, which a baro released
@@ -3605,7 +3618,7 @@ mod tests {
         let dt = 0.2;
         c.baro_gps_level.step(dt, [0.3 * rng.normal() - e, 0.0, 0.0], [0.0; 3], [0.0; 3]);
         c.track.step(dt, [0.0, 0.0, 0.3 * rng.normal() - e], [0.0; 3], [0.0; 3]);
-        let out = c.altitude_vote(epv);
+        let out = c.altitude_vote(epv, true);
         if learn {
             c.track.learn();
             c.baro_gps_level.learn();
@@ -3657,10 +3670,10 @@ mod tests {
         // The baro alone departs (its level moves, the track does not).
         c.baro_gps_level.step(0.2, [8.0, 0.0, 0.0], [0.0; 3], [0.0; 3]);
         c.track.step(0.2, [0.0; 3], [0.0; 3], [0.0; 3]);
-        assert_eq!(c.altitude_vote(0.5), (0.0, false));
+        assert_eq!(c.altitude_vote(0.5, true), (0.0, false));
         // Both depart, opposite ways.
         c.track.step(0.2, [0.0, 0.0, -8.0], [0.0; 3], [0.0; 3]);
-        assert_eq!(c.altitude_vote(0.5).0, 0.0);
+        assert_eq!(c.altitude_vote(0.5, true).0, 0.0);
     }
 
     #[test]
