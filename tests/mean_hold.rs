@@ -15,6 +15,15 @@ use common::{flagged_after, share_and_after};
 use navguard::battery::{self, Flight, Split};
 use navguard::Config;
 
+/// Instance `i` of check `c`, checked to be a step of `magnitude` m: the
+/// share of it flagged, and the epochs flagged in the 20 s after it, of
+/// how many.
+fn check_step(c: usize, i: u64, magnitude: f64) -> (f64, usize, usize) {
+    let f = battery::CHECKS[c].flight(c, i);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].magnitude), ("step", magnitude));
+    share_and_after(&f, 20.0)
+}
+
 /// Regression: instance 2 of the 10 m step check (fixed wing, 10 Hz white
 /// receiver σ 2.55 m, consumer 50 Hz IMU). The step is 3.9 σ of one fix:
 /// the verdict called one epoch, the filter followed the rest, and 2 of
@@ -22,9 +31,7 @@ use navguard::Config;
 /// and at most 5 of the about 200 epochs in the 20 s after it.
 #[test]
 fn a_10_m_step_under_a_noisy_10_hz_receiver_is_held() {
-    let f = battery::CHECKS[0].flight(0, 2);
-    assert_eq!((f.faults[0].kind.name(), f.faults[0].magnitude), ("step", 10.0));
-    let (share, n, of) = share_and_after(&f, 20.0);
+    let (share, n, of) = check_step(0, 2, 10.0);
     assert!(share >= 0.95, "{:.0}% of the step flagged", 100.0 * share);
     assert!(of >= 150 && n <= 5, "{n} of {of} epochs flagged in the 20 s after the step");
 }
@@ -66,9 +73,7 @@ fn a_slow_receivers_wander_is_not_judged_on_its_mean() {
 /// inside an episode held on the mean: 99%.
 #[test]
 fn a_brief_first_episode_does_not_mute_the_mean() {
-    let f = battery::CHECKS[5].flight(5, 0);
-    assert_eq!((f.faults[0].kind.name(), f.faults[0].magnitude), ("step", 6.0));
-    let (share, _, _) = share_and_after(&f, 20.0);
+    let (share, _, _) = check_step(5, 0, 6.0);
     assert!(share >= 0.95, "{:.0}% of the step flagged", 100.0 * share);
 }
 
@@ -81,9 +86,7 @@ fn a_brief_first_episode_does_not_mute_the_mean() {
 /// epochs in the 20 s after it (the mean's 0.6 s to come back).
 #[test]
 fn a_noisy_fix_back_on_the_baro_does_not_end_a_held_step() {
-    let f = battery::CHECKS[5].flight(5, 5);
-    assert_eq!((f.faults[0].kind.name(), f.faults[0].magnitude), ("step", 6.0));
-    let (share, n, of) = share_and_after(&f, 20.0);
+    let (share, n, of) = check_step(5, 5, 6.0);
     assert!(share >= 0.95, "{:.0}% of the step flagged", 100.0 * share);
     assert!(of >= 300 && n <= 15, "{n} of {of} epochs flagged in the 20 s after the step");
 }
