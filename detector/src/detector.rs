@@ -320,8 +320,11 @@ const RETURN_MIN_SIGMAS: f64 = 6.0;
 /// receiver is 5.4 σ_Δ (battery tune #551).
 const KEEP_MIN_SIGMAS: f64 = 4.0;
 /// An episode opened on the fix's short mean (`Episode::mean_hold`) holds
-/// while that mean stays this many of its σ off the velocity track.
+/// while that mean stays this many of its σ off the velocity track; the
+/// scale puts `MEAN_KEEP` just above the ANFIS boundary, as
+/// `HOLD_R_SCALE` does for the per-fix hold.
 const MEAN_KEEP: f64 = 4.0;
+const MEAN_HOLD_R_SCALE: f64 = 2.8 / MEAN_KEEP;
 /// A position-only episode's offset (`Episode::off_sigmas`) into the
 /// position group's R: `KEEP_MIN_SIGMAS` lands just above the ANFIS
 /// boundary (R ≈ 2.55), so an offset the episode's end would keep holds
@@ -2776,7 +2779,7 @@ impl Detector {
         // a noisy fast receiver's step is a few of its per-fix σ.
         let mut held = self.episode.held(&res.pin.nu, &sigma_coast, &sigma_track);
         if self.episode.mean_hold && self.episode.withheld.gps_pos() {
-            held = held.fmax(self.consistency.track.mean_sigmas() * (2.8 / MEAN_KEEP));
+            held = held.fmax(self.consistency.track.mean_sigmas() * MEAN_HOLD_R_SCALE);
         }
         ind.fold(0, held);
         self.ind.fold_unfolded(held);
@@ -2909,7 +2912,8 @@ impl Detector {
         // return) is not a new fault's onset. Not every episode's end: a
         // step's first epochs may open and close an episode before the
         // mean calls (the 6 m vertical step check's instances 1 and 6, 10
-        // and 20 Hz receivers: 6% of their epochs flagged, now 40% and 15%).
+        // and 20 Hz receivers: 6% of their epochs flagged; 40% and 15% with
+        // this rule, 100% with the returns above not taken in a hold).
         if restart || step.returned {
             self.consistency.track.settle_mean();
         }

@@ -224,6 +224,8 @@ impl VelocityTrack {
         let by_level = self.z_from(&p, &self.origin) > NEAR && takes_back(&level) && self.steps_along(&off, &level) > NEAR;
         if (by_base || by_level) && self.z_from(&d, &self.origin) < NEAR {
             self.base = self.origin;
+            // The short mean restarts on the fix, as at every re-basing.
+            self.dm = d;
             self.outlying = 0.0;
             self.at_origin = true;
         }
@@ -287,6 +289,7 @@ impl VelocityTrack {
         } else {
             if self.outlying >= RELEARN_S {
                 self.base = d;
+                self.dm = d;
                 self.motion_base = self.motion;
             }
             self.outlying = 0.0;
@@ -563,8 +566,8 @@ mod tests {
     }
 
     /// Under white noise of 2.5 m per fix at 10 Hz, a 10 m step east is
-    /// 4 σ of one fix (never `FAR`, so `departed` stays silent) and about
-    /// 13 σ of the short mean, which calls it within half a second; over
+    /// 4 σ of one fix (never `FAR`, so `departed` stays silent) and 11.6 σ
+    /// of the short mean after a second, which calls it at its fourth fix; over
     /// 10 minutes of the noise alone the mean calls nothing.
     #[test]
     fn the_short_mean_calls_a_step_a_single_fix_cannot() {
