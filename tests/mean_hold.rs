@@ -24,7 +24,7 @@ fn check_step(c: usize, i: u64, magnitude: f64) -> (f64, usize, usize) {
     share_and_after(&f, 20.0)
 }
 
-/// Regression: instance 2 of the 10 m step check (fixed wing, 10 Hz white
+/// Regression: instance 3 of the 10 m step check (fixed wing, 10 Hz white
 /// receiver σ 2.55 m, consumer 50 Hz IMU). The step is 3.9 σ of one fix:
 /// the verdict called one epoch, the filter followed the rest, and 2 of
 /// its 600 epochs were flagged. On the mean it is about 12 σ: now 600,
