@@ -130,3 +130,20 @@ fn a_baro_step_that_moved_the_filter_is_not_held_past_its_return() {
     let (share, fp) = share_and_false_positives(Split::Tune, 628, "baro-step");
     assert!(share >= 0.35 && fp <= 5, "{:.0}% of the step flagged (6% before), {fp} false-positive epochs", 100.0 * share);
 }
+
+/// Regression: tune #1379 (fixed wing, 5 Hz receiver): an 8.2 m baro step
+/// from 9 s into the flight, on the ground, for 114 s. The step's jump was
+/// held until its Doppler level had moved another 4 m during the take-off
+/// roll (0 → 15 m/s: the static port's dynamic-pressure error), read as a
+/// level that went on moving, and let go: 49 of 570 epochs flagged. The
+/// level's change beyond the jump now counts net of what the motion may
+/// move a healthy baro (`barojump::BaroJump::held`): held to its end.
+#[test]
+fn a_baro_step_on_the_ground_is_held_through_the_take_off_roll() {
+    let f = Flight::draw(Split::Tune, 1379);
+    assert_eq!(f.faults[0].kind.name(), "baro-step");
+    let r = battery::run(&f, &Config::default()).unwrap();
+    assert!(r.events[0].share >= 0.95, "{:.0}% of the step flagged", 100.0 * r.events[0].share);
+    let (n, of) = flagged_after(&f, 20.0);
+    assert!(of >= 90 && n <= 2, "{n} of {of} epochs flagged in the 20 s after the step");
+}

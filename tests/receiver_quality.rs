@@ -163,3 +163,39 @@ fn the_jump_back_after_a_degraded_stretch_is_its_end_not_a_step() {
     let n = after.iter().filter(|st| **st != 0).count();
     assert!(after.len() > 100 && n <= 3, "{n} of {} epochs flagged in the 60 s after the stretch", after.len());
 }
+
+/// Regression: tune #451 (5 Hz receiver): a 5.75 m degraded fix of 4–5
+/// satellites and a claim of 5–10 m for 99 s. Judged fix by fix against
+/// the bar that opens a stretch (≤ 4 satellites, a 2D fix, or a claim 3×
+/// the usual one), each 5-satellite fix whose claim was under 3× read as
+/// usual: 484 of its 972 epochs flagged (0.50). A stretch now lasts while
+/// the receiver has fewer than 6 satellites or a claim 2× its usual one,
+/// within 3 s of the last fix that opened it: all of them, and none of the
+/// usual fixes in the 20 s after it.
+#[test]
+fn a_degraded_fix_of_four_and_five_satellites_is_one_stretch() {
+    let f = Flight::draw(Split::Tune, 451);
+    assert_eq!(f.faults[0].kind.name(), "degraded");
+    let ft = f.faults[0];
+    let r = battery::run(&f, &Config::default()).unwrap();
+    assert!(r.events[0].share >= 0.99, "{:.1}% of the degraded fix flagged", 100.0 * r.events[0].share);
+    let after: Vec<u8> = r.epochs.iter().filter(|e| e.t >= ft.end_log && e.t < ft.end_log + 20.0).map(|e| e.status).collect();
+    assert!(after.len() >= 90 && after.iter().all(|st| *st == 0), "{:?}", after);
+}
+
+/// Regression: eval #1022 (hover, 20 Hz receiver whose usual count drops
+/// to 5 satellites after a 12 s degraded fix). With no time bound, its
+/// usual 5-satellite fixes held the stretch for the next 100 s (1,704
+/// false-positive epochs, and the 9.7 m step after them was read as the
+/// receiver's word, not judged). Now at most the 3 s bound after it.
+#[test]
+fn a_receiver_whose_usual_count_is_five_does_not_hold_a_stretch() {
+    let f = Flight::draw(Split::Eval, 1022);
+    assert_eq!(f.faults[0].kind.name(), "degraded");
+    let ft = f.faults[0];
+    let r = battery::run(&f, &Config::default()).unwrap();
+    let after = r.epochs.iter().filter(|e| e.t >= ft.end_log && e.t < ft.end_log + 30.0);
+    let (n, of) = after.fold((0, 0), |(n, of), e| (n + usize::from(e.status != 0), of + 1));
+    assert!(of >= 500 && n <= 60, "{n} of {of} epochs flagged in the 30 s after the degraded fix");
+    assert!(r.events[1].share >= 0.9, "{:.0}% of the step after it flagged", 100.0 * r.events[1].share);
+}

@@ -55,7 +55,9 @@
 //! filter, and the filter's climb, integrated instead, took the jump into
 //! the level within seconds (battery tune #1617: a 13.6 m step, its
 //! Doppler level back to a quarter of it 3 s later; #628).
+use crate::drift::{allowance, net_of, K_CLIMB, K_DYN};
 use crate::track::{VelocityTrack, FAR, NEAR, RELEARN_S, RETURN_UNDONE};
+use crate::window::Motion;
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
@@ -86,6 +88,9 @@ pub struct BaroJump {
     /// The last epoch judged while the baro was withheld jumped back by
     /// most of the remembered jump: the step's end (`epoch`).
     ended: bool,
+    /// The motion at the remembered jump: how far the baro's healthy
+    /// error may have moved since (`drift::allowance`).
+    motion: Motion,
 }
 
 impl BaroJump {
@@ -112,14 +117,14 @@ impl BaroJump {
     /// Built for size in the core module: once per GPS epoch (issue 15's
     /// budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
-    pub fn epoch(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack, withheld: bool) {
+    pub fn epoch(&mut self, t: f64, gps: &VelocityTrack, dop: &VelocityTrack, withheld: bool, motion: &Motion) {
         let seen = if self.blocked { None } else { jump_of(gps, dop) };
         let undone = match (seen, self.jump) {
             (Some((jn, d0, _)), Some((j, dl, _))) => {
                 // `track::undoes` on one axis, written out: calling it
                 // costs 33 B of core (issue 15's budget).
                 let undo = -jn / j;
-                undo >= RETURN_UNDONE.0 && undo <= RETURN_UNDONE.1 && (d0 - dl) / j > KEPT
+                undo >= RETURN_UNDONE.0 && undo <= RETURN_UNDONE.1 && self.kept(d0 - dl, j, dop, motion) > KEPT
             }
             _ => false,
         };
@@ -127,10 +132,11 @@ impl BaroJump {
         if undone {
             self.clear();
         } else if !withheld {
-            let keep = !self.blocked && (self.jump.is_some_and(|(_, _, tj)| t - tj < WAIT_S) || self.held(t, dop) > 1.0);
+            let keep = !self.blocked && (self.jump.is_some_and(|(_, _, tj)| t - tj < WAIT_S) || self.held(t, dop, motion) > 1.0);
             if let Some((j, d0, departing)) = seen {
                 if departing {
                     self.jump = Some((j, d0, t));
+                    self.motion = *motion;
                 } else if !keep {
                     self.jump = None;
                 }
@@ -154,11 +160,35 @@ impl BaroJump {
     /// How much of the remembered jump the Doppler level `dop` still
     /// holds at `t` s, over `KEPT` (so 1 at `KEPT`); NaN with no jump,
     /// `RELEARN_S` after it, or when the level holds more than `2 − KEPT`
-    /// of it.
+    /// of it. The level's change beyond the jump counts net of what the
+    /// motion since the jump (from the jump's motion to `now`) moved the
+    /// baro's healthy error: by the level's own error model once it has
+    /// one (`VelocityTrack::moved_by_motion`), and within the physical
+    /// bound (`drift::allowance`) before. A fixed wing's take-off roll
+    /// moves its static port's error by metres (battery tune #1379: an
+    /// 8.2 m step from 9 s, its Doppler level 4 m further off 6 s later at
+    /// 15 m/s, was let go there and missed for 104 s). The bound alone, on
+    /// a level that has learnt its model, excused an aggressive flight's
+    /// wander for as long as a jump may hold (tune #1110: an unflagged
+    /// drift's return held for 80 s, 494 false-positive epochs).
     #[inline(never)]
-    pub fn held(&self, t: f64, dop: &VelocityTrack) -> f64 {
-        let share = self.jump.filter(|(_, _, tj)| t - tj < RELEARN_S).map_or(f64::NAN, |(j, d0, _)| (dop.level().unwrap_or(d0) - d0) / j);
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    pub fn held(&self, t: f64, dop: &VelocityTrack, now: &Motion) -> f64 {
+        let share = self.jump.filter(|(_, _, tj)| t - tj < RELEARN_S).map_or(f64::NAN, |(j, d0, _)| self.kept(dop.level().unwrap_or(d0) - d0, j, dop, now));
         if share < 2.0 - KEPT { share / KEPT } else { f64::NAN }
+    }
+
+    /// The share of the jump `j` m that a change `moved` m of the Doppler
+    /// level `dop` since it holds, net of the motion since the jump (see
+    /// `held`): 1 when the level moved by the jump give or take what the
+    /// motion explains.
+    fn kept(&self, moved: f64, j: f64, dop: &VelocityTrack, now: &Motion) -> f64 {
+        let (from, to) = ([self.motion.speed2, self.motion.climb], [now.speed2, now.climb]);
+        let (model, slack) = match dop.moved_by_motion([K_DYN, K_CLIMB], from, to) {
+            Some(m) => (m, 0.0),
+            None => (0.0, allowance(&self.motion, now)),
+        };
+        1.0 + net_of(moved - j - model, slack.fmax(0.0)) / j
     }
 }
 
@@ -189,13 +219,13 @@ mod tests {
                 let (g, e) = (3.0 * rng.normal(), 0.05 * rng.normal());
                 levels.0.step(dt, [off(k) + g, 0.0, 0.0], [0.0; 3], [0.0; 3]);
                 levels.1.step(dt, [off(k) + e, 0.0, 0.0], [0.0; 3], [0.0; 3]);
-                bj.epoch(k as f64 * dt, &levels.0, &levels.1, withheld);
+                bj.epoch(k as f64 * dt, &levels.0, &levels.1, withheld, &Motion::default());
                 withheld |= withhold && bj.jump.is_some();
                 if !withheld {
                     levels.0.learn();
                     levels.1.learn();
                 }
-                bj.held(k as f64 * dt, &levels.1)
+                bj.held(k as f64 * dt, &levels.1, &Motion::default())
             })
             .collect()
     }
@@ -262,5 +292,5 @@ mod codec_impls {
     use super::*;
     use crate::codec::impl_codec;
 
-    impl_codec!(BaroJump { jump, blocked, ended });
+    impl_codec!(BaroJump { jump, blocked, ended, motion });
 }

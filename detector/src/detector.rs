@@ -550,6 +550,10 @@ const QUALITY_RUN: u32 = 3;
 const QUALITY_DECLARED: f64 = 3.0;
 /// Satellites at or below which a fix is degraded by its own count.
 const MAX_DEGRADED_SATS: f64 = 4.0;
+/// Satellites a receiver must give again to end a stretch it declared
+/// degraded: the count ArduPilot's and PX4's GPS checks require before
+/// their EKF uses the receiver (`EK3_GPS_CHECK`, `EKF2_REQ_NSATS`).
+const MIN_TRUSTED_SATS: f64 = 6.0;
 
 /// One of the receiver's accuracy claims (eph m, sAcc m/s) learnt as its
 /// usual level: a mean of ln(claim), so only ratios are used.
@@ -626,18 +630,42 @@ impl ReceiverQuality {
     /// Whether the receiver declares the fix degraded in its own fields
     /// (2D, ≤ `MAX_DEGRADED_SATS` satellites, or an accuracy claim
     /// `QUALITY_DECLARED` times its learnt usual one), once it has given a
-    /// fix it did not call degraded. Fix by fix, as the receiver says it:
-    /// holding a declaration over the next usual fixes (1 s and 3 fixes was
-    /// tried) flagged the good fixes after a degraded stretch (paper
-    /// scenario false positives 14 → 164). The detector's tests still judge
-    /// the fix (down-weighted, see `scale`); this is the receiver's word,
-    /// reported as it is, like a no-fix report.
+    /// fix it did not call degraded. A declared stretch lasts while the
+    /// receiver stays below what it takes to be trusted again: fewer than
+    /// `MIN_TRUSTED_SATS` satellites, or a claim `QUALITY_DEGRADED` times
+    /// its usual one, within `DECLARED_RETURN_S` of the last fix that
+    /// opened it. A usual fix ends it: holding a declaration over the
+    /// next usual fixes (1 s and 3 fixes was tried) flagged the good fixes
+    /// after a degraded stretch (paper scenario false positives 14 → 164).
+    /// The detector's tests still judge the fix (down-weighted, see
+    /// `scale`); this is the receiver's word, reported as it is, like a
+    /// no-fix report.
+    ///
+    /// Built for size in the core module, and not inlined: once per GPS
+    /// epoch (issue 15's budget).
+    #[inline(never)]
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn declares_degraded(&mut self, fix: &Fix) -> bool {
         let learnt = self.pos.learnt();
         let says = fix.self_declared_degraded();
         self.acquired |= !says;
-        self.declared = self.acquired && (says || (learnt && self.scale(fix.eph) >= QUALITY_DECLARED));
-        if self.declared {
+        // Once declared, a stretch lasts while the receiver has fewer
+        // satellites than a fix needs to be used again, or a claim at the
+        // level the usual one refuses to learn (`QUALITY_DEGRADED`), for
+        // up to `DECLARED_RETURN_S` after the last fix that opened it: a
+        // receiver that lost satellites says so fix by fix, and its
+        // 5-satellite fixes between 4-satellite ones are no better (battery
+        // eval #354: a 20 Hz receiver's 65 s degraded fix was flagged on
+        // 654 of its 1,259 epochs, about every other one). The bound keeps
+        // a receiver whose usual count is 5 from holding a stretch on its
+        // usual fixes (eval #1022: 100 s held after a 12 s degraded fix).
+        let scale = self.scale(fix.eph);
+        let opens = says || (learnt && scale >= QUALITY_DECLARED);
+        let few = fix.sats < MIN_TRUSTED_SATS;
+        let recent = self.last_declared.is_some_and(|d| fix.t - d <= DECLARED_RETURN_S);
+        let keeps = self.declared && recent && (few || scale >= QUALITY_DEGRADED);
+        self.declared = self.acquired && (opens || keeps);
+        if self.declared && opens {
             self.last_declared = Some(fix.t);
         }
         self.declared
@@ -1308,6 +1336,10 @@ impl Consistency {
     /// so the jump re-anchored onto is kept like a coasted-out episode's
     /// offset: the step's own end undoes it instead of opening a 60 s
     /// episode.
+    ///
+    /// Built for size in the core module: once per GPS epoch (issue 15's
+    /// budget).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn unflagged_fault_ended(&mut self, episode: &mut Episode, res: &Residuals, usual: bool, sigma_dv: [f64; 3]) -> bool {
         // Asked first: a remembered offset is forgotten once undone, even
         // when the track also says the fault ended.
@@ -1353,6 +1385,10 @@ impl Consistency {
     /// remembered (see `barojump`): the filter's climb then holds the
     /// jump the baro fed it. Returns the baro drift statistic (see
     /// `drift`), NaN when not judged.
+    ///
+    /// Built for size in the core module: once per GPS epoch (issue 15's
+    /// budget).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     fn baro_levels(&mut self, t: f64, y: &Vector3<f64>, v: Option<&Vector3<f64>>, vel_withheld: bool, epv: f64, withheld: bool) -> (f64, (f64, f64)) {
         let v = v.filter(|_| !vel_withheld || withheld || self.baro_jump.remembered());
         let vup = v.map_or(f64::NAN, |v| -v[2]);
@@ -1382,9 +1418,9 @@ impl Consistency {
         // A withheld baro is also held off by the step it jumped (see
         // `barojump`), which the GPS altitude's noise may hide.
         self.baro_held = held_departure(deps.0, deps.1);
-        self.baro_jump.epoch(t, &self.baro_gps_level, &self.baro_dop_level, withheld);
+        self.baro_jump.epoch(t, &self.baro_gps_level, &self.baro_dop_level, withheld, &motion);
         if withheld {
-            self.baro_held = self.baro_held.fmax(self.baro_jump.held(t, &self.baro_dop_level));
+            self.baro_held = self.baro_held.fmax(self.baro_jump.held(t, &self.baro_dop_level, &motion));
         }
         let level_off = !(self.baro_held < PLATEAU_HELD);
         (self.baro_drift.push(dt, level.map(|l| l.unwrap_or(f64::NAN)), motion, epv, level_off), deps)
@@ -1813,7 +1849,6 @@ impl Withheld {
     /// Feed every group again (normal verdict, re-anchoring, data gap). The
     /// baro's calm count restarts at the next baro sample that is fed.
     #[cfg_attr(navguard_cold_size, optimize(size))]
-    #[inline(never)]
     fn release(&mut self) {
         self.groups = [false; GROUPS];
     }
@@ -3247,9 +3282,38 @@ mod tests {
         assert!(!q.declares_degraded(&fix(2.9, 9.0, 3.0)), "2.9x its usual claim is not a declaration");
         assert!(q.declares_degraded(&fix(3.1, 9.0, 3.0)), "3.1x is");
         assert!(q.declares_degraded(&fix(1.0, 4.0, 3.0)) && q.declares_degraded(&fix(1.0, 9.0, 2.0)));
+        assert!(!q.declares_degraded(&fix(1.0, 6.0, 3.0)), "6 satellites and a usual claim end the stretch");
         assert!(!q.declares_degraded(&fix(1.0, 5.0, 3.0)), "5 satellites and a usual claim");
         // No sats or fix type in the log: only the claim can declare.
         assert!(!q.declares_degraded(&fix(1.0, f64::NAN, f64::NAN)) && q.declares_degraded(&fix(4.0, f64::NAN, f64::NAN)));
+    }
+
+    /// A declared stretch lasts while the receiver stays below what it
+    /// takes to be trusted again: fewer than 6 satellites, or a claim 2×
+    /// its usual one (3× opens a stretch). A usual fix with 6 ends it, and
+    /// neither alone opens one.
+    #[test]
+    fn a_declared_stretch_lasts_until_the_receiver_is_trusted_again() {
+        let mut q = ReceiverQuality::default();
+        let fix = |eph: f64, sats: f64| Fix { t: 0.0, y: Vector3::zeros(), vel: None, eph, epv: f64::NAN, gps_time: f64::NAN, sacc: f64::NAN, sats, fix_type: 3.0 };
+        let at = |t: f64, sats: f64| Fix { t, ..fix(1.0, sats) };
+        for _ in 0..60 {
+            q.pos.learn(1.0);
+            assert!(!q.declares_degraded(&fix(1.0, 9.0)));
+        }
+        assert!(!q.declares_degraded(&fix(2.5, 9.0)) && !q.declares_degraded(&fix(1.0, 5.0)), "neither opens a stretch");
+        assert!(q.declares_degraded(&fix(1.0, 4.0)), "4 satellites open one");
+        assert!(q.declares_degraded(&fix(1.0, 5.0)), "5 satellites keep it");
+        assert!(q.declares_degraded(&fix(2.5, 9.0)), "2.5x the usual claim keeps it");
+        assert!(!q.declares_degraded(&fix(1.9, 9.0)), "1.9x with 9 satellites ends it");
+        assert!(q.declares_degraded(&fix(3.1, 9.0)) && q.declares_degraded(&fix(2.1, 9.0)));
+        assert!(!q.declares_degraded(&fix(1.0, 6.0)), "a usual fix with 6 satellites ends it");
+        // A log without sats: the claim alone keeps it.
+        assert!(q.declares_degraded(&fix(3.5, f64::NAN)) && q.declares_degraded(&fix(2.2, f64::NAN)) && !q.declares_degraded(&fix(1.5, f64::NAN)));
+        // For up to 3 s after the last fix that opened it: a receiver whose
+        // usual count is 5 does not hold it on its usual fixes.
+        assert!(q.declares_degraded(&at(10.0, 4.0)) && q.declares_degraded(&at(12.9, 5.0)) && !q.declares_degraded(&at(13.1, 5.0)));
+        assert!(!q.declares_degraded(&at(13.2, 5.0)), "and it stays ended");
     }
 
     /// A bad or edge value for column `i`: the bounds, just outside them,

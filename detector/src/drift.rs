@@ -123,7 +123,8 @@ const GPS_CONFIRM: f64 = 2.0;
 const WIND_M_S: f64 = 3.0;
 
 /// How far a healthy baro's error may move between motions `a` and `b`, m.
-fn allowance(a: &Motion, b: &Motion) -> f64 {
+#[inline(never)]
+pub(crate) fn allowance(a: &Motion, b: &Motion) -> f64 {
     let ground = if a.height.fmin(b.height) < GROUND_BAND_M { GROUND_M } else { 0.0 };
     let (dn, de) = (a.v_ne[0] - b.v_ne[0], a.v_ne[1] - b.v_ne[1]);
     let dv = (dn * dn + de * de).sqrt();
@@ -181,10 +182,13 @@ fn confirmed(z: [f64; 2]) -> f64 {
 /// motion allowance (its sign kept, 0 inside the allowance).
 fn net_change(a: &Entry, b: &Entry, scale: f64) -> [f64; 2] {
     let allow = allowance(&b.motion, &a.motion);
-    core::array::from_fn(|k| {
-        let s = (b.x[k] - a.x[k]) * scale;
-        s.signum() * (s.abs() - allow).fmax(0.0)
-    })
+    core::array::from_fn(|k| net_of((b.x[k] - a.x[k]) * scale, allow))
+}
+
+/// A change `s` m net of an allowance `allow` m: its sign kept, 0 inside
+/// the allowance (and for an allowance of NaN).
+pub(crate) fn net_of(s: f64, allow: f64) -> f64 {
+    s.signum() * (s.abs() - allow).fmax(0.0)
 }
 
 impl DriftTest {

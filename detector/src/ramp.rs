@@ -177,7 +177,9 @@ fn split(a: &[f64; 3], b: &[f64; 3]) -> [f64; 2] {
 }
 
 impl RampTest {
-    /// Restart (the track restarted).
+    /// Restart (the track restarted). Built for size in the core module:
+    /// rare (issue 15's budget).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn clear(&mut self) {
         let (ms, fast_ms, dev_ms, restarted) = (self.ms, self.fast_ms, self.dev_ms, self.restarted || self.t > 0.0);
         *self = RampTest { ms, fast_ms, dev_ms, restarted, ..RampTest::default() };

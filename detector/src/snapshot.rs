@@ -87,8 +87,9 @@ pub const FORMAT: &str = "navguard-snapshot";
 /// its pending GPS return (`DriftTest::near_before`). 31: the IMU test
 /// judged by its window's slope (`LagTest::push_by_slope`). 32: the
 /// tracks' short mean (`VelocityTrack::dm`, `ms_mean`, `since_calm`) and
-/// the episode's hold on it (`Episode::mean_hold`).
-pub const VERSION: u32 = 32;
+/// the episode's hold on it (`Episode::mean_hold`). 33: the motion at the
+/// baro's remembered jump (`barojump::BaroJump::motion`).
+pub const VERSION: u32 = 33;
 
 #[derive(Clone)]
 struct Header {

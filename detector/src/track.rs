@@ -364,10 +364,28 @@ impl VelocityTrack {
     /// budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn departure_net(&self, k: [f64; 2]) -> f64 {
+        self.departure_by(self.modelled(k, self.deviation()))
+    }
+
+    /// What the level's error model (`error_model`, bounded by `k`) makes
+    /// of a motion change `x` ([speed² (m/s)², climb m/s]), m; a part
+    /// unknown moves nothing.
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    fn modelled(&self, k: [f64; 2], x: [f64; 2]) -> f64 {
         let c = self.error_model(k);
-        let x = self.deviation();
-        let moved: f64 = (0..2).map(|i| if x[i].is_finite() { c[i] * x[i] } else { 0.0 }).sum();
-        self.departure_by(moved)
+        (0..2).map(|i| if x[i].is_finite() { c[i] * x[i] } else { 0.0 }).sum()
+    }
+
+    /// How far the first axis' healthy error moves from the motion `from`
+    /// to `to` (horizontal speed² (m/s)², climb m/s), m, by the level's
+    /// own error model (`error_model`, bounded by `k`; a part unknown at
+    /// either end moves nothing). None before the baseline has lived
+    /// `MIN_AGE_S`: no model is learnt yet.
+    pub fn moved_by_motion(&self, k: [f64; 2], from: [f64; 2], to: [f64; 2]) -> Option<f64> {
+        if self.age < MIN_AGE_S {
+            return None;
+        }
+        Some(self.modelled(k, [to[0] - from[0], to[1] - from[1]]))
     }
 
     /// The level's error per unit of motion deviation, least squares over

@@ -73,7 +73,7 @@ test('snapshot, Detector.restore and continue equals an uninterrupted run (objec
     while (got.length < cut) got.push(det.push(row(got.length)));
     const snap = det.snapshot();
     assert.ok(snap instanceof Uint8Array && snap.length > 1000);
-    assert.equal(ng.snapshotInfo(snap).version, 32);
+    assert.equal(ng.snapshotInfo(snap).version, 33);
     det.free();
     det = ng.Detector.restore(snap);
     assert.ok(det instanceof ng.Detector);
