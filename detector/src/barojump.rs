@@ -169,8 +169,8 @@ impl BaroJump {
     /// 8.2 m step from 9 s, its Doppler level 4 m further off 6 s later at
     /// 15 m/s, was let go there and missed for 104 s). The bound alone, on
     /// a level that has learnt its model, excused manoeuvres for as long as
-    /// a jump may hold (275 more false-positive epochs over six battery
-    /// sets: tune #1047, #731, #296, #107, eval #224). Neither tells the
+    /// a jump may hold (312 more false-positive epochs over six battery
+    /// sets, most on tune #1047, #731, #296, #107 and eval #224). Neither tells the
     /// return of a drift the levels learnt from a step (tune #1110, held
     /// for its last 80 s).
     #[inline(never)]

@@ -17,7 +17,7 @@ pub fn flagged_after_fault(f: &Flight, i: usize, len: f64) -> (usize, usize) {
 
 /// In a run `r`: its GPS epochs flagged in the `len` s after fault `i`
 /// ends, and its GPS epochs in that span.
-fn after_fault(r: &FlightResult, i: usize, len: f64) -> (usize, usize) {
+pub fn after_fault(r: &FlightResult, i: usize, len: f64) -> (usize, usize) {
     let end = r.flight.faults[i].end_log;
     let after: Vec<u8> = r.epochs.iter().filter(|e| e.t >= end && e.t < end + len).map(|e| e.status).collect();
     (after.iter().filter(|st| **st != 0).count(), after.len())
