@@ -3,10 +3,14 @@
 //!
 //! `cargo run --release -p navguard-examples --example battery -- [--split eval|tune] [--flights N]
 //!  [--start I] [--method M] [--config CFG.json] [--checks N] [--imu-flights N]
-//!  [--threads T] [--json] [--verbose] [--write DIR] [--sacc]`
+//!  [--threads T] [--json] [--verbose] [--write DIR] [--sacc] [--reconciled]`
 //!
 //! `--sacc`: the same flights with receivers that report their speed
 //! accuracy (`Flight::with_speed_claims`).
+//!
+//! `--reconciled`: score the whole-flight reconciled verdicts (what
+//! `audit` reports as `reconciled`, `FlightResult::reconciled`) instead of
+//! the causal ones.
 //!
 //! Defaults: eval split, 240 flights, the default detector, 6 instances per
 //! specific check, 6 flights for IMU-rate invariance, 2 threads.
@@ -28,10 +32,11 @@ struct Args {
     verbose: bool,
     write: Option<String>,
     sacc: bool,
+    reconciled: bool,
 }
 
 fn parse() -> Result<Args, String> {
-    let mut a = Args { split: Split::Eval, flights: 240, start: 0, cfg: Config::default(), checks: 6, imu_flights: 6, threads: 2, json: false, verbose: false, write: None, sacc: false };
+    let mut a = Args { split: Split::Eval, flights: 240, start: 0, cfg: Config::default(), checks: 6, imu_flights: 6, threads: 2, json: false, verbose: false, write: None, sacc: false, reconciled: false };
     let mut it = std::env::args().skip(1);
     let num = |v: Option<String>, name: &str| -> Result<u64, String> { v.ok_or(format!("{name}: missing value"))?.parse().map_err(|e| format!("{name}: {e}")) };
     let mut method: Option<String> = None;
@@ -53,6 +58,7 @@ fn parse() -> Result<Args, String> {
             "--verbose" => a.verbose = true,
             "--write" => a.write = it.next(),
             "--sacc" => a.sacc = true,
+            "--reconciled" => a.reconciled = true,
             other => return Err(format!("unknown argument {other}")),
         }
     }
@@ -64,7 +70,7 @@ fn parse() -> Result<Args, String> {
 }
 
 /// Run every flight on `threads` threads; results in flight order.
-fn run_all(flights: &[Flight], cfg: &Config, threads: usize) -> Result<Vec<FlightResult>, String> {
+fn run_all(flights: &[Flight], cfg: &Config, threads: usize, reconciled: bool) -> Result<Vec<FlightResult>, String> {
     let next = AtomicUsize::new(0);
     let out: Mutex<Vec<Option<Result<FlightResult, String>>>> = Mutex::new(vec![None; flights.len()]);
     std::thread::scope(|s| {
@@ -72,7 +78,7 @@ fn run_all(flights: &[Flight], cfg: &Config, threads: usize) -> Result<Vec<Fligh
             s.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::Relaxed);
                 let Some(f) = flights.get(i) else { break };
-                let r = battery::run(f, cfg);
+                let r = battery::run(f, cfg).map(|r| if reconciled { r.reconciled() } else { r });
                 if let Ok(mut o) = out.lock() {
                     o[i] = Some(r);
                 }
@@ -122,7 +128,7 @@ fn main() -> Result<(), String> {
         }
         eprintln!("wrote {} flights to {dir}", flights.len());
     }
-    let results = run_all(&flights, &a.cfg, a.threads)?;
+    let results = run_all(&flights, &a.cfg, a.threads, a.reconciled)?;
     let overall = battery::group_row("all", &results.iter().collect::<Vec<_>>(), &|_| true);
     let tables = battery::tables(&results);
 
@@ -130,14 +136,14 @@ fn main() -> Result<(), String> {
     let mut check_rows = vec![];
     for (c, spec) in CHECKS.iter().enumerate() {
         let fl: Vec<Flight> = (0..a.checks).map(|i| spec.flight(c, i)).collect();
-        let rs = run_all(&fl, &a.cfg, a.threads)?;
+        let rs = run_all(&fl, &a.cfg, a.threads, a.reconciled)?;
         let evs: Vec<battery::EventResult> = rs.iter().filter_map(|r| r.events.first().cloned()).collect();
         check_rows.push((spec, evs));
     }
     let mut imu_rows = vec![];
     for i in 0..a.imu_flights {
         let fl = battery::imu_rate_flights(i);
-        let rs = run_all(&fl, &a.cfg, a.threads)?;
+        let rs = run_all(&fl, &a.cfg, a.threads, a.reconciled)?;
         let pcts: Vec<f64> = rs.iter().map(|r| r.flagged_pct()).collect();
         imu_rows.push((fl[0].describe().replace("IMU 50 Hz", "IMU 50-400 Hz"), pcts));
     }

@@ -22,6 +22,9 @@ fn main() {
     let mut det = Detector::new(Config::default()).unwrap();
     for s in &rows {
         let o = det.push(s).unwrap();
+        if let Some(since) = det.retro_since() {
+            println!("{:8.2} retro since {since:.2}", s.t);
+        }
         if baro && s.baro.is_finite() {
             println!("{:8.2} baro {:.4}", s.t, s.baro);
         }

@@ -62,7 +62,7 @@ impl FaultInterval {
 
     /// One interval spanning `self` and a later `o` of the same kind.
     fn merged(mut self, o: &FaultInterval) -> Self {
-        self.end = o.end;
+        self.end = self.end.max(o.end);
         self.rows += o.rows;
         if o.peak_f > self.peak_f {
             self.peak_f = o.peak_f;
@@ -122,17 +122,22 @@ fn offset_of(driver: &str, resid: &[f64; 7]) -> (Option<f64>, &'static str) {
     }
 }
 
-/// The causal intervals reconciled over the whole log: intervals of the
-/// same kind whose gap is shorter than `RECONCILE_GAP_S` (or 3 GPS
-/// periods, `gps_period` s, if longer) are one fault seen with gaps (a
-/// verdict flickering on an offset near its threshold), so they become one
-/// interval from the first onset to the last end.
-pub fn reconcile(faults: &[FaultInterval], gps_period: f64) -> Vec<FaultInterval> {
+/// The causal intervals reconciled over the whole log (issue 14 item 4).
+/// `dated`: the spans the detector dated once their fault ended
+/// ([`RetroSpans::interval`]), which join the causal intervals they
+/// overlap. Intervals of the same kind whose gap is shorter than
+/// `RECONCILE_GAP_S` (or 3 GPS periods, `gps_period` s, if longer) are one
+/// fault seen with gaps (a verdict flickering on an offset near its
+/// threshold), so they become one interval from the first onset to the
+/// last end.
+pub fn reconcile(faults: &[FaultInterval], dated: &[FaultInterval], gps_period: f64) -> Vec<FaultInterval> {
     let max_gap = RECONCILE_GAP_S.max(3.0 * gps_period);
-    let mut out: Vec<FaultInterval> = Vec::with_capacity(faults.len());
-    for iv in faults {
+    let mut all: Vec<&FaultInterval> = faults.iter().chain(dated).collect();
+    all.sort_by(|a, b| a.start.total_cmp(&b.start));
+    let mut out: Vec<FaultInterval> = Vec::with_capacity(all.len());
+    for iv in all {
         match out.last_mut() {
-            Some(last) if last.kind == iv.kind && iv.start - last.end <= max_gap => {
+            Some(last) if iv.start <= last.end || (last.kind == iv.kind && iv.start - last.end <= max_gap) => {
                 *last = last.clone().merged(iv);
             }
             _ => out.push(iv.clone()),
@@ -143,6 +148,57 @@ pub fn reconcile(faults: &[FaultInterval], gps_period: f64) -> Vec<FaultInterval
 
 /// s: see [`reconcile`].
 pub const RECONCILE_GAP_S: f64 = 2.0;
+
+/// The spans a detector dated once their fault had ended (see
+/// [`Detector::retro_since`]): from the fault's onset to the row that
+/// ended it, boot-clock s. A whole log's reconciled verdict is the causal
+/// one or any of these; the streaming verdict never looks back.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RetroSpans {
+    /// `(onset, end)` pairs, in the order they were dated.
+    pub spans: Vec<(f64, f64)>,
+}
+
+impl RetroSpans {
+    /// After `det` took the row at `t` (s): keep the span it dated there,
+    /// if any (at most `MAX_LISTED`).
+    pub fn note(&mut self, det: &Detector, t: f64) {
+        if let Some(since) = det.retro_since() {
+            if self.spans.len() < MAX_LISTED && since < t {
+                self.spans.push((since, t));
+            }
+        }
+    }
+
+    /// Whether row time `t` (s) lies in a dated span (its end excluded: the
+    /// row that ended the fault is the truth again).
+    pub fn covers(&self, t: f64) -> bool {
+        self.spans.iter().any(|&(a, b)| t >= a && t < b)
+    }
+
+    /// The span dated at the row `det` just took (see [`Detector::retro_since`])
+    /// as a fault interval: a position fault (every span the detector dates
+    /// is one) whose peak offset is the GPS's jump back at its end. Its
+    /// `rows` are 0: they were judged before the span was dated.
+    fn interval(det: &Detector, o: &Output) -> Option<FaultInterval> {
+        let since = det.retro_since().filter(|s| *s < o.t)?;
+        let (peak_offset, offset_unit) = offset_of("gps_position", &det.residuals());
+        let iv = FaultInterval {
+            start: since,
+            end: o.t,
+            kind: "residual",
+            peak_f: o.f,
+            driver: "gps_position",
+            indicator: "R",
+            rows: 0,
+            peak_offset,
+            offset_unit,
+            duration_s: 0.0,
+            severity: "",
+        };
+        Some(iv.closed())
+    }
+}
 
 /// A pause in which every sensor stopped.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -178,7 +234,9 @@ pub struct Report {
     /// Flagged intervals as the streaming detector gave them (causal).
     pub faults: Vec<FaultInterval>,
     /// `faults` reconciled over the whole log ([`reconcile`]): what a
-    /// person reading the log afterwards should count as fault intervals.
+    /// person reading the log afterwards should count as fault intervals,
+    /// with the spans the detector dated once a fault ended (a drag-off
+    /// from its onset, a coasted-out step to its end; [`RetroSpans`]).
     /// `faults` stays the causal verdict, as the streaming `push` gave it.
     pub reconciled: Vec<FaultInterval>,
     /// Pauses in which every sensor stopped (logging gaps).
@@ -273,6 +331,8 @@ struct Tally {
     /// whether the last row was one.
     upsets: Vec<Gap>,
     in_upset: bool,
+    /// Spans the detector dated once their fault ended (`RetroSpans`).
+    dated: Vec<FaultInterval>,
 }
 
 impl Tally {
@@ -295,6 +355,7 @@ impl Tally {
             seen: [false; 4],
             upsets: vec![],
             in_upset: false,
+            dated: vec![],
         })
     }
 
@@ -330,6 +391,9 @@ impl Tally {
             self.flagged_epochs += 1;
         }
         track(&mut self.open, &mut self.faults, &o, &self.det);
+        if let Some(iv) = RetroSpans::interval(&self.det, &o).filter(|_| self.dated.len() < MAX_LISTED) {
+            self.dated.push(iv);
+        }
         let upset = o.kind == kind::UPSET;
         if upset && self.in_upset {
             if let Some(u) = self.upsets.last_mut() {
@@ -383,7 +447,7 @@ impl Tally {
         let active = (duration - gaps.iter().map(|g| g.end - g.start).sum::<f64>()).max(1e-9);
         faults.truncate(MAX_LISTED);
         let gps_period = if st.gps_epochs > 0 { active / st.gps_epochs as f64 } else { 1.0 };
-        let reconciled = reconcile(&faults, gps_period);
+        let reconciled = reconcile(&faults, &self.dated, gps_period);
         Report {
             format,
             rows,

@@ -42,6 +42,7 @@
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::Serialize;
 
+use crate::audit::RetroSpans;
 use crate::config::Config;
 use crate::detector::Detector;
 use crate::frames::Anchor;
@@ -1469,6 +1470,10 @@ pub struct Epoch {
     pub label: f64,
     /// Detector status: 0 normal, 1 fault.
     pub status: u8,
+    /// The whole-flight reconciled verdict ([`crate::audit::RetroSpans`]):
+    /// `status`, or 1 inside a span the detector dated once the fault
+    /// ended.
+    pub reconciled: u8,
 }
 
 /// How the detector did on one fault interval (an "event").
@@ -1522,6 +1527,14 @@ impl FlightResult {
         let n = self.epochs.len().max(1) as f64;
         100.0 * self.epochs.iter().filter(|e| e.status != 0).count() as f64 / n
     }
+    /// The same flight scored on its reconciled verdicts (what a whole-log
+    /// audit reports) instead of the causal ones.
+    pub fn reconciled(&self) -> FlightResult {
+        let epochs: Vec<Epoch> = self.epochs.iter().map(|e| Epoch { status: e.reconciled, ..*e }).collect();
+        let f = &self.flight;
+        let events = f.faults.iter().map(|ft| event_result(f, ft, &epochs)).collect();
+        FlightResult { flight: f.clone(), epochs, events, rows: self.rows }
+    }
 }
 
 /// Length of the post-fault window watched for a new interval, true s.
@@ -1530,12 +1543,17 @@ pub const AFTER_WINDOW: f64 = 20.0;
 /// Run `cfg`'s detector over a flight's rows.
 pub fn run_rows(f: &Flight, rows: &[Sample], cfg: &Config) -> Result<FlightResult, String> {
     let mut det = Detector::new(cfg.clone())?;
-    let mut epochs = Vec::with_capacity(rows.len() / 10);
+    let mut epochs: Vec<Epoch> = Vec::with_capacity(rows.len() / 10);
+    let mut spans = RetroSpans::default();
     for s in rows {
         let o = det.push(s).map_err(|e| format!("flight {} ({}): {e}", f.index, f.seed))?;
+        spans.note(&det, s.t);
         if !s.label.is_nan() {
-            epochs.push(Epoch { t: s.t, label: s.label, status: o.status });
+            epochs.push(Epoch { t: s.t, label: s.label, status: o.status, reconciled: o.status });
         }
+    }
+    for e in &mut epochs {
+        e.reconciled |= spans.covers(e.t) as u8;
     }
     let events = f.faults.iter().map(|ft| event_result(f, ft, &epochs)).collect();
     Ok(FlightResult { flight: f.clone(), epochs, events, rows: rows.len() as u64 })

@@ -47,7 +47,7 @@ fn reconcile_joins_flicker_of_one_kind_only() {
         // Adjacent but another kind: kept apart.
         interval(26.5, 40.0, "gps_outage", None, ""),
     ];
-    let r = reconcile(&causal, 0.2);
+    let r = reconcile(&causal, &[], 0.2);
     assert_eq!(r.len(), 3, "{r:?}");
     assert_eq!((r[0].start, r[0].end, r[0].rows), (10.0, 20.0, 2));
     assert_eq!(r[0].peak_offset, Some(11.0));
@@ -55,7 +55,27 @@ fn reconcile_joins_flicker_of_one_kind_only() {
     assert_eq!((r[1].start, r[1].severity), (25.0, "low"));
     assert_eq!((r[2].kind, r[2].severity), ("gps_outage", "medium"));
     // At 1 Hz GPS the gap allowed is 3 periods.
-    assert_eq!(reconcile(&causal[..3], 2.0).len(), 1);
+    assert_eq!(reconcile(&causal[..3], &[], 2.0).len(), 1);
+}
+
+#[test]
+fn reconcile_joins_a_dated_span_to_the_intervals_it_overlaps() {
+    // A drag-off dated from 5 s at its end, 30 s (rows 0: judged before it
+    // was dated), over a causal blip at 8-9 s and touching the interval its
+    // return opened, of another kind: one interval from 5 to 31 s. An
+    // outage 10 s later stays apart.
+    let causal = [
+        interval(8.0, 9.0, "residual", Some(1.0), "m"),
+        interval(30.0, 31.0, "gps_degraded", Some(3.0), "m"),
+        interval(41.0, 45.0, "gps_outage", None, ""),
+    ];
+    let mut dated = interval(5.0, 30.0, "residual", Some(24.0), "m");
+    dated.rows = 0;
+    let r = reconcile(&causal, &[dated], 0.2);
+    assert_eq!(r.len(), 2, "{r:?}");
+    assert_eq!((r[0].start, r[0].end, r[0].rows), (5.0, 31.0, 2));
+    assert_eq!((r[0].peak_offset, r[0].duration_s, r[0].severity), (Some(24.0), 26.0, "high"));
+    assert_eq!((r[1].start, r[1].kind), (41.0, "gps_outage"));
 }
 
 #[test]

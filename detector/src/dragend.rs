@@ -211,9 +211,14 @@ impl DragEnd {
         self.pending = Some(Pending { t0: t, u, len, n_b, mean_b, ss_b, n_a: 1.0, sum_a: x, sum2_a: x * x });
     }
 
-    /// Whether the armed jump is now confirmed as a drag-off's end.
-    /// `flown`: time flown, s; the drag cannot be older. Judged once, at the
-    /// first epoch `AFTER_S` and `MIN_AFTER` entries past the jump (the
+    /// Whether the armed jump is now confirmed as a drag-off's end (NaN
+    /// when not), and then when the drag began (s on the row clock: the
+    /// jump's time less the drag's age, the jump over the shift and its σ,
+    /// the latest onset the shift allows, in true s over `scale`, true s
+    /// per row s; 0 without the `dated` feature). A float, not an option:
+    /// the core module's size budget. `flown`: time flown, s; the drag
+    /// cannot be older. Judged once, at the first epoch `AFTER_S` and
+    /// `MIN_AFTER` entries past the jump (the
     /// shape the learnt σ measures: a longer wait lets `z`'s slow drift,
     /// the accelerometer bias integrated, pass for a shift), then disarmed;
     /// given up `GIVE_UP_S` after the jump.
@@ -221,14 +226,14 @@ impl DragEnd {
     /// Built for size in the core module: judged only while armed (issue
     /// 15's budget).
     #[cfg_attr(navguard_cold_size, optimize(size))]
-    pub fn confirmed(&mut self, t: f64, flown: f64) -> bool {
-        let Some(p) = self.pending else { return false };
+    pub fn confirmed(&mut self, t: f64, flown: f64, scale: f64) -> f64 {
+        let Some(p) = self.pending else { return f64::NAN };
         if t - p.t0 > GIVE_UP_S {
             self.pending = None;
-            return false;
+            return f64::NAN;
         }
         if t - p.t0 < AFTER_S || p.n_a < MIN_AFTER as f64 {
-            return false;
+            return f64::NAN;
         }
         self.pending = None;
         let mean_a = p.sum_a / p.n_a;
@@ -243,8 +248,13 @@ impl DragEnd {
         // there, so both see it; each has its own noise.
         let v = self.short_shift(p.t0);
         let short = v[0] * p.u[0] + v[1] * p.u[1];
-        let drag = |shift: f64, sigma: f64| shift > Z * sigma && (MIN_AGE_S..=flown).contains(&(p.len / shift));
-        drag(shift, sigma) || drag(short, self.short.sigma())
+        let drag = |shift: f64, sigma: f64| match shift > Z * sigma && (MIN_AGE_S..=flown).contains(&(p.len / shift)) {
+            true if cfg!(feature = "dated") => p.t0 - p.len / (shift + sigma) / scale,
+            true => 0.0,
+            false => f64::NAN,
+        };
+        let long = drag(shift, sigma);
+        if long.is_nan() { drag(short, self.short.sigma()) } else { long }
     }
 
     /// The shift of `z`'s mean (N, E) from the `SHORT_S` before `t0` to the
@@ -352,10 +362,10 @@ impl DragEnds {
         }
     }
 
-    /// Which ends are confirmed at this epoch: horizontal, vertical (see
-    /// `DragEnd::confirmed`).
-    pub fn confirmed(&mut self, t: f64, flown: f64) -> [bool; 2] {
-        [self.h.confirmed(t, flown), self.v.confirmed(t, flown)]
+    /// Which ends are confirmed at this epoch, with their drags' onsets:
+    /// horizontal, vertical (see `DragEnd::confirmed`).
+    pub fn confirmed(&mut self, t: f64, flown: f64, scale: f64) -> [f64; 2] {
+        [self.h.confirmed(t, flown, scale), self.v.confirmed(t, flown, scale)]
     }
 
     /// A normal epoch (see `DragEnd::learn`).
@@ -403,14 +413,19 @@ mod tests {
         let mut t = 10.2;
         while t < 14.0 {
             d.push(t, Some([0.8 + 0.3 * rng.normal(), 0.3 * rng.normal()]));
-            if d.confirmed(t, 100.0) {
-                at = Some(t);
+            let since = d.confirmed(t, 100.0, 1.0);
+            if !since.is_nan() {
+                at = Some((t, since));
                 break;
             }
             t += 0.2;
         }
-        let at = at.expect("confirmed");
+        let (at, since) = at.expect("confirmed");
         assert!(at <= 12.3, "confirmed at {at}");
+        // The drag began 20 s before its end, at -10 s. It is dated at the
+        // latest onset the shift allows, 16 m over the shift plus its σ
+        // (about 0.8 + 0.2 m/s here): later than -10 s, not before it.
+        assert!((-10.5..-5.5).contains(&since), "began at {since}");
         assert!(!d.armed());
     }
 
@@ -428,7 +443,7 @@ mod tests {
             let mut t = 10.2;
             while d.armed() && t < 14.0 {
                 d.push(t, Some([0.05 * rng.normal(), 0.3 * rng.normal()]));
-                assert!(!d.confirmed(t, flown));
+                assert!(d.confirmed(t, flown, 1.0).is_nan());
                 t += 0.2;
             }
             assert_eq!(d.ruled_out, ruled, "flown {flown}");
@@ -447,7 +462,7 @@ mod tests {
             let mut t = 10.2;
             while t < 15.0 {
                 d.push(t, Some([0.2 + 0.3 * rng.normal(), 0.3 * rng.normal()]));
-                assert!(!d.confirmed(t, 100.0), "seed {seed}: confirmed at {t}");
+                assert!(d.confirmed(t, 100.0, 1.0).is_nan(), "seed {seed}: confirmed at {t}");
                 t += 0.2;
             }
             assert!(!d.armed(), "gave up");
@@ -502,7 +517,7 @@ mod tests {
         let mut t = 10.2;
         while t < 15.0 {
             d.push(t, Some([1.0 + 0.1 * rng.normal(), 0.0]));
-            assert!(!d.confirmed(t, 100.0));
+            assert!(d.confirmed(t, 100.0, 1.0).is_nan());
             t += 0.2;
         }
     }
@@ -595,7 +610,7 @@ mod tests {
             } else if i == jump {
                 d.arm(t, [27.0, 0.0]);
             } else {
-                confirmed |= d.confirmed(t, 160.0);
+                confirmed |= !d.confirmed(t, 160.0, 1.0).is_nan();
             }
         }
         confirmed

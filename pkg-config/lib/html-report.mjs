@@ -21,8 +21,9 @@ export function verdictOf(report) {
 /**
  * The intervals to show: the causal `faults`, as the streaming API and
  * `audit --json` give them, so every table counts the same intervals.
- * (`report.reconciled` joins flicker of one kind; `reconciledCount` says how
- * many intervals that leaves.)
+ * (`report.reconciled` joins flicker of one kind and adds the spans the
+ * detector dated once a fault ended, such as a drag-off from its onset;
+ * `reconciledCount` says how many intervals that leaves.)
  */
 export function faultList(report) {
   return (report && report.faults) || [];

@@ -24,7 +24,7 @@ export interface FaultInterval {
 export interface AuditReport {
   format: "csv" | "ulog" | "dataflash"; rows: number; durationS: number; gpsEpochs: number; gpsRateHz: number; imuRateHz: number;
   gpsAvailable: boolean; gpsFixFraction: number; flaggedGpsEpochFraction: number;
-  /** Causal intervals, as `push` gave them; `reconciled`: the same over the whole log, gaps under 2 s (or 3 GPS periods) of one kind joined. */
+  /** Causal intervals, as `push` gave them; `reconciled`: the same over the whole log, gaps under 2 s (or 3 GPS periods) of one kind joined, with the spans the detector dated once a fault ended (a drag-off from its onset, a step past its coast limit; `rows` 0 for those). */
   faults: FaultInterval[]; reconciled: FaultInterval[]; dataGaps: { start: number; end: number }[]; missing: string[]; warnings: string[];
   meta: [string, string][]; metrics?: Metrics; stats: DetectorStats;
   /** Boot-clock s of the first row; show times as t - startT. startUtc: ISO 8601 UTC of the first row when the log has GPS time. */

@@ -1,0 +1,89 @@
+//! Issue 14 item 4: the whole-log reconciled verdict. When the detector
+//! sees a fault end that it did not flag throughout (a drag-off's return,
+//! whose age the velocity's jump tells; a step past its 60 s coast limit,
+//! undone by its own end), it dates the fault's onset
+//! (`Detector::retro_since`); the audit's `reconciled` intervals and the
+//! battery's `FlightResult::reconciled` label the rows from then on. The
+//! causal verdict (`status`, `faults`) is untouched.
+mod common;
+
+use navguard::audit::{audit_bytes, RetroSpans};
+use navguard::battery::{self, Flight, FlightResult, Split};
+use navguard::{Config, Detector};
+
+/// Battery flight `index` of `split`, whose fault `i` is of `kind`, run.
+fn run(split: Split, index: u64, i: usize, kind: &str) -> FlightResult {
+    let f = Flight::draw(split, index);
+    assert_eq!(f.faults[i].kind.name(), kind);
+    battery::run(&f, &Config::default()).unwrap()
+}
+
+/// Epochs labelled healthy but flagged.
+fn false_positives(r: &FlightResult) -> usize {
+    r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count()
+}
+
+#[test]
+fn a_drag_off_the_filter_followed_is_dated_from_its_onset_at_its_end() {
+    // Tune #572 (a fixed wing on a vibrating consumer IMU), its second
+    // fault: 0.89 m/s for 95.5 s, never flagged while it lasted. Its end
+    // (an 84 m jump back, the velocity 0.89 m/s with it) is read as a
+    // drag-off's return, and its age, the jump over the velocity's shift,
+    // dates the onset.
+    let r = run(Split::Tune, 572, 1, "drag-off");
+    assert!(r.events[1].share < 0.02, "causal share {}", r.events[1].share);
+    let rec = r.reconciled();
+    assert!(rec.events[1].share > 0.95, "reconciled share {}", rec.events[1].share);
+    // The onset is dated at the latest the velocity's jump and its σ allow
+    // (1.5 s after the true one here): no healthy epoch is labelled.
+    assert_eq!(false_positives(&rec), false_positives(&r));
+}
+
+#[test]
+fn a_step_held_past_its_coast_limit_is_dated_when_its_end_undoes_it() {
+    // Tune #353: a 6.6 m hover step for 105 s. The episode coasts out at
+    // 60 s and its offset is kept (`Episode::accepted`); the step's end
+    // undoes it, which dates the 45 s the causal verdict let pass.
+    let r = run(Split::Tune, 353, 0, "step");
+    let causal = r.events[0].share;
+    assert!((0.5..0.65).contains(&causal), "causal share {causal}");
+    let rec = r.reconciled();
+    assert!(rec.events[0].share > 0.97, "reconciled share {}", rec.events[0].share);
+    assert_eq!(false_positives(&rec), false_positives(&r));
+}
+
+#[test]
+fn a_clean_flight_dates_nothing() {
+    // The first six healthy flights of the eval split: no span is dated,
+    // so the reconciled verdict is the causal one.
+    for i in [7, 25, 28, 31, 36, 45] {
+        let f = Flight::draw(Split::Eval, i);
+        assert!(f.faults.is_empty(), "eval #{i} is clean");
+        let rows = battery::simulate(&f);
+        let (mut det, mut spans) = (Detector::new(Config::default()).unwrap(), RetroSpans::default());
+        for s in &rows {
+            det.push(s).unwrap();
+            spans.note(&det, s.t);
+        }
+        assert_eq!(spans.spans, vec![], "eval #{i}");
+    }
+}
+
+#[test]
+fn the_audit_reports_the_dated_drag_off_as_one_reconciled_interval() {
+    // The same flight as a navlog CSV through `audit`: no causal interval
+    // covers the drag; the reconciled list has one that does, with the
+    // jump back as its peak offset.
+    let f = Flight::draw(Split::Tune, 572);
+    let csv = battery::to_csv(&f, &battery::simulate(&f));
+    let (report, _) = audit_bytes(csv.as_bytes(), &Config::default(), false).unwrap();
+    let (a, b) = (f.faults[1].start_log, f.faults[1].end_log);
+    let covered = |ivs: &[navguard::audit::FaultInterval]| ivs.iter().map(|iv| (iv.end.min(b) - iv.start.max(a)).max(0.0)).sum::<f64>();
+    assert!(covered(&report.faults) < 2.0, "causal {:?}", report.faults);
+    let iv = report.reconciled.iter().find(|iv| iv.start < a + 3.0 && iv.end >= b - 0.5).expect("a reconciled interval over the drag");
+    assert!((a..a + 3.0).contains(&iv.start), "dated from {} (onset {a})", iv.start);
+    assert_eq!((iv.kind, iv.driver, iv.offset_unit, iv.severity), ("residual", "gps_position", "m", "high"));
+    let off = iv.peak_offset.unwrap();
+    // 0.89 m/s for 95.5 s, less half the 3 s build-up: 84 m.
+    assert!((75.0..95.0).contains(&off), "peak offset {off} m");
+}
