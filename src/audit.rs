@@ -35,7 +35,9 @@ pub struct FaultInterval {
     pub driver: &'static str,
     /// Which indicator was further above its clean level at the peak: "R" or "C".
     pub indicator: &'static str,
-    /// Rows inside the interval (all sensors).
+    /// Rows inside the interval (all sensors). A span the detector dated
+    /// once its fault ended (in `Report::reconciled`) adds none: its rows
+    /// were judged before it was dated.
     pub rows: u64,
     /// Largest offset of the driving sensor from the filter's prediction
     /// inside the interval (the reference: the estimate coasting on the IMU
@@ -60,7 +62,8 @@ impl FaultInterval {
         self
     }
 
-    /// One interval spanning `self` and a later `o` of the same kind.
+    /// One interval spanning `self` and an `o` that starts later (of the
+    /// same kind, or overlapping `self`: see [`reconcile`]).
     fn merged(mut self, o: &FaultInterval) -> Self {
         self.end = self.end.max(o.end);
         self.rows += o.rows;
@@ -124,7 +127,7 @@ fn offset_of(driver: &str, resid: &[f64; 7]) -> (Option<f64>, &'static str) {
 
 /// The causal intervals reconciled over the whole log (issue 14 item 4).
 /// `dated`: the spans the detector dated once their fault ended
-/// ([`RetroSpans::interval`]), which join the causal intervals they
+/// ([`RetroSpans`], as intervals), which join the causal intervals they
 /// overlap. Intervals of the same kind whose gap is shorter than
 /// `RECONCILE_GAP_S` (or 3 GPS periods, `gps_period` s, if longer) are one
 /// fault seen with gaps (a verdict flickering on an offset near its
