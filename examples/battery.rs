@@ -130,6 +130,10 @@ fn main() -> Result<(), String> {
     }
     let results = run_all(&flights, &a.cfg, a.threads, a.reconciled)?;
     let overall = battery::group_row("all", &results.iter().collect::<Vec<_>>(), &|_| true);
+    // The same flights' whole-log reconciled verdicts (what `audit` lists as
+    // `reconciled`), beside the causal ones.
+    let reconciled: Vec<FlightResult> = results.iter().map(|r| r.reconciled()).collect();
+    let overall_rec = battery::group_row("all", &reconciled.iter().collect::<Vec<_>>(), &|_| true);
     let tables = battery::tables(&results);
 
     // Specific checks.
@@ -174,23 +178,31 @@ fn main() -> Result<(), String> {
             .collect();
         let v = serde_json::json!({
             "split": a.split.name(), "start": a.start, "flights": a.flights, "method": a.cfg.method.name(),
-            "overall": overall, "tables": tables, "events": events, "checks": checks, "imuRate": imu,
+            "overall": overall, "overallReconciled": overall_rec, "tables": tables, "events": events, "checks": checks, "imuRate": imu,
             "rows": rows, "seconds": secs, "perFlight": per_flight,
         });
         println!("{v}");
         return Ok(());
     }
 
-    let m = &overall.metrics;
+    let (m, mr) = (&overall.metrics, &overall_rec.metrics);
+    let first = if a.reconciled { "reconciled" } else { "causal (push)" };
     println!("## Battery: {} split, flights {}..{}, method {}\n", a.split.name(), a.start, a.start + a.flights, a.cfg.method.name());
-    println!("| figure | value | target |\n|---|---|---|");
-    println!("| accuracy | {:.3} | ≥ 0.97 |", m.accuracy);
-    println!("| false alarm FP/(TP+FP) | {:.3} | ≤ 0.05 |", m.false_alarm_rate);
-    println!("| misdetection FN/(TP+FN) | {:.3} | ≤ 0.10 |", m.misdetection_rate);
-    println!("| F2 | {:.3} | |", m.f2);
-    println!("| events flagged / events | {}/{} | all |", overall.events_flagged, overall.events);
-    println!("| clean flights: GPS epochs flagged | {:.2}% of {} epochs ({} flights) | ≤ 0.2% |", overall.clean_pct(), overall.clean_epochs, overall.clean_flights);
-    println!("| median detection delay | {:.1} s | |", overall.median_delay);
+    println!("| figure | {first} | reconciled (audit, whole log) | target |\n|---|---|---|---|");
+    println!("| accuracy | {:.3} | {:.3} | ≥ 0.97 |", m.accuracy, mr.accuracy);
+    println!("| false alarm FP/(TP+FP) | {:.3} | {:.3} | ≤ 0.05 |", m.false_alarm_rate, mr.false_alarm_rate);
+    println!("| misdetection FN/(TP+FN) | {:.3} | {:.3} | ≤ 0.10 |", m.misdetection_rate, mr.misdetection_rate);
+    println!("| F2 | {:.3} | {:.3} | |", m.f2, mr.f2);
+    println!("| events flagged / events | {}/{} | {}/{} | all |", overall.events_flagged, overall.events, overall_rec.events_flagged, overall_rec.events);
+    println!(
+        "| clean flights: GPS epochs flagged | {:.2}% of {} epochs ({} flights) | {:.2}% | ≤ 0.2% |",
+        overall.clean_pct(),
+        overall.clean_epochs,
+        overall.clean_flights,
+        overall_rec.clean_pct()
+    );
+    println!("| median detection delay | {:.1} s | (a dated onset is no detection) | |", overall.median_delay);
+    println!("\nThe specific checks and the tables below score the {first} verdict.");
     println!("\n{} flights, {} rows, {:.0} s ({:.2} M rows/s incl. simulation, {} threads)\n", results.len(), rows, secs, rows as f64 / secs / 1e6, a.threads);
 
     println!("### Specific checks ({} instances each, eval-split flights)\n", a.checks);
