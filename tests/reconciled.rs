@@ -87,3 +87,32 @@ fn the_audit_reports_the_dated_drag_off_as_one_reconciled_interval() {
     // 0.89 m/s for 95.5 s, less half the 3 s build-up: 84 m.
     assert!((75.0..95.0).contains(&off), "peak offset {off} m");
 }
+
+#[test]
+fn every_dated_span_lies_inside_the_log_and_ends_where_it_was_dated() {
+    // Over the first 40 eval flights from #480 on with a drag-off or a
+    // step longer than the 60 s coast limit (the faults that get dated):
+    // each span begins at or after the log's first row (a drag is never
+    // older than the time flown, a kept offset never older than its
+    // episode), ends at the row that dated it, and is at least a GPS
+    // period long. Some spans are dated: the property is not vacuous.
+    let datable = |f: &Flight| f.faults.iter().any(|ft| ft.kind.name() == "drag-off" || (ft.kind.name() == "step" && ft.duration() > 60.0));
+    let flights: Vec<(u64, Flight)> = (480..).map(|i| (i, Flight::draw(Split::Eval, i))).filter(|(_, f)| datable(f)).take(40).collect();
+    let mut dated = 0;
+    for (i, f) in flights {
+        let rows = battery::simulate(&f);
+        let (mut det, mut spans) = (Detector::new(Config::default()).unwrap(), RetroSpans::default());
+        for s in &rows {
+            det.push(s).unwrap();
+            let before = spans.spans.len();
+            spans.note(&det, s.t);
+            if spans.spans.len() > before {
+                let (a, b) = spans.spans[before];
+                assert_eq!(b, s.t, "eval #{i}");
+                assert!(a >= rows[0].t && b - a >= 0.05, "eval #{i}: span {a}..{b}");
+            }
+        }
+        dated += spans.spans.len();
+    }
+    assert!(dated >= 8, "{dated} spans dated (11 at the end of session 26)");
+}
