@@ -399,15 +399,33 @@ function summaryList(report, name) {
 function faultTable(report, t0) {
   const faults = faultList(report);
   if (!faults.length) return `<p class="muted">${report.gpsAvailable ? 'No fault interval.' : 'No interval: nothing to judge without GPS.'}</p>`;
+  return intervalTable(faults, t0, 'interval', 'faults sortable');
+}
+
+/**
+ * The whole-log reconciled intervals when they differ from the causal ones
+ * (flicker joined; faults the detector saw end dated from their onset, such
+ * as a drag-off it followed), folded away under the causal table; '' when
+ * they are the same. Their rows are `tr.reconciled-interval`.
+ */
+export function reconciledTable(report, t0) {
+  const rec = report && Array.isArray(report.reconciled) ? report.reconciled : null;
+  const faults = faultList(report);
+  const same = (a, b) => a.start === b.start && a.end === b.end;
+  if (!rec || (rec.length === faults.length && rec.every((r, i) => same(r, faults[i])))) return '';
+  return `<details class="reconciled"><summary>Reconciled over the whole log: ${rec.length} interval${rec.length === 1 ? '' : 's'}</summary><p class="note">The causal intervals above are what the detector said as the samples came. Here, intervals of one kind less than 2 s apart are joined, and a fault the detector saw end without flagging it throughout (a drag-off it followed, a step held past its coast limit) is dated from its onset.</p>${intervalTable(rec, t0, 'reconciled-interval', 'reconciled sortable')}</details>`;
+}
+
+function intervalTable(faults, t0, rowClass, tableClass) {
   const hasSev = faults.some((f) => severity(f));
   const hasOff = faults.some((f) => Number.isFinite(f.peakOffset));
   const head = `<tr><th class="num">#</th><th class="num">start</th><th class="num">end</th><th class="num">duration s</th><th>kind</th>${hasSev ? '<th>severity</th>' : ''}${hasOff ? '<th class="num">peak offset</th>' : ''}<th class="num">peak F</th><th>driver</th><th>indicator</th></tr>`;
   const rows = faults.map((f, i) => {
     const dur = Number.isFinite(f.durationS) ? f.durationS : f.end - f.start;
     const sev = severity(f);
-    return `<tr class="interval" data-start="${f.start - t0}" data-end="${f.end - t0}" data-kind="${esc(f.kind)}"><td class="num">${i + 1}</td><td class="num" data-sort="${f.start - t0}">${fmtSince(f.start - t0)}</td><td class="num" data-sort="${f.end - t0}">${fmtSince(f.end - t0)}</td><td class="num">${fmtNum(dur, 2)}</td><td>${esc(f.kind)}</td>${hasSev ? `<td class="sev-${esc(sev)}">${esc(sev || '-')}</td>` : ''}${hasOff ? `<td class="num">${Number.isFinite(f.peakOffset) ? `${fmtNum(f.peakOffset, 1)} ${esc(f.offsetUnit || '')}` : '-'}</td>` : ''}<td class="num">${fmtNum(f.peakF, 2)}</td><td>${esc(f.driver)}</td><td>${esc(f.indicator)}</td></tr>`;
+    return `<tr class="${rowClass}" data-start="${f.start - t0}" data-end="${f.end - t0}" data-kind="${esc(f.kind)}"><td class="num">${i + 1}</td><td class="num" data-sort="${f.start - t0}">${fmtSince(f.start - t0)}</td><td class="num" data-sort="${f.end - t0}">${fmtSince(f.end - t0)}</td><td class="num">${fmtNum(dur, 2)}</td><td>${esc(f.kind)}</td>${hasSev ? `<td class="sev-${esc(sev)}">${esc(sev || '-')}</td>` : ''}${hasOff ? `<td class="num">${Number.isFinite(f.peakOffset) ? `${fmtNum(f.peakOffset, 1)} ${esc(f.offsetUnit || '')}` : '-'}</td>` : ''}<td class="num">${fmtNum(f.peakF, 2)}</td><td>${esc(f.driver)}</td><td>${esc(f.indicator)}</td></tr>`;
   });
-  return `<table class="faults sortable"><thead>${head}</thead><tbody>${rows.join('')}</tbody></table>`;
+  return `<table class="${tableClass}"><thead>${head}</thead><tbody>${rows.join('')}</tbody></table>`;
 }
 
 function eventTables(report, t0) {
@@ -464,8 +482,10 @@ function flightSection(fl, i) {
   L.push(summaryList(report, name));
   if (!report.gpsAvailable) L.push(`<p class="note nogps">${esc(checkedWithoutGps(report))}</p>`);
   const rc = reconciledCount(report);
-  L.push(`<h3>Fault intervals (${faultList(report).length}${rc !== null && rc !== faultList(report).length ? `; ${rc} once gaps under 2 s are joined` : ''})</h3>`);
+  const rec = reconciledTable(report, t0);
+  L.push(`<h3>Fault intervals (${faultList(report).length}${rec ? `; ${rc} reconciled over the whole log, below` : ''})</h3>`);
   L.push(faultTable(report, t0));
+  L.push(rec);
   if (series) L.push(plots(i, report, series));
   L.push(eventTables(report, t0));
   const warn = report.warnings || [];

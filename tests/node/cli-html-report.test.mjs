@@ -68,3 +68,20 @@ test('the interval table shows severity and peak offset when the report has them
   assert.match(nogps, /<tr data-verdict="unreadable"><td><a href="#flight-1">c\.bin<\/a>/);
   assert.match(nogps, /2 logs: 1 no verdict, 1 unreadable/);
 });
+
+test('the reconciled intervals are listed, folded, when they differ from the causal ones', () => {
+  // A drag-off dated from 102 s at its end, 110 s, over the causal
+  // interval its return opened: one reconciled interval, 102-112.5 s.
+  const dated = { ...fault, start: 102, end: 112.5, rows: 13, severity: 'high', peakOffset: 7.2, offsetUnit: 'm', durationS: 10.5 };
+  const html = H.renderReport({ version: '0.0.0', generated: 'now', flights: [{ name: 'a.bin', report: { ...base, faults: [fault], reconciled: [dated] } }] });
+  assert.match(html, /<h3>Fault intervals \(1; 1 reconciled over the whole log, below\)<\/h3>/);
+  assert.match(html, /<details class="reconciled"><summary>Reconciled over the whole log: 1 interval<\/summary>/);
+  assert.match(html, /<tr class="reconciled-interval" data-start="2" data-end="12.5" data-kind="residual">/);
+  // The causal table is untouched: one `tr.interval`, the causal one.
+  assert.equal((html.match(/<tr class="interval"/g) || []).length, 1);
+  // The same intervals: nothing more is shown.
+  const same = H.renderReport({ version: '0.0.0', generated: 'now', flights: [{ name: 'a.bin', report: { ...base, faults: [fault], reconciled: [fault] } }] });
+  assert.doesNotMatch(same, /details class="reconciled"/);
+  assert.match(same, /<h3>Fault intervals \(1\)<\/h3>/);
+  assert.equal(H.reconciledTable({ ...base, faults: [fault] }, 100), '');
+});
