@@ -132,7 +132,10 @@ fn offset_of(driver: &str, resid: &[f64; 7]) -> (Option<f64>, &'static str) {
 /// `RECONCILE_GAP_S` (or 3 GPS periods, `gps_period` s, if longer) are one
 /// fault seen with gaps (a verdict flickering on an offset near its
 /// threshold), so they become one interval from the first onset to the
-/// last end.
+/// last end. A stale fix and no fix count as one kind there: a frozen
+/// receiver whose records also drop alternates between them at every
+/// epoch (battery tune #572: a 9.7 s frozen fix listed as 161 intervals,
+/// now one), and either way no fresh fix came.
 pub fn reconcile(faults: &[FaultInterval], dated: &[FaultInterval], gps_period: f64) -> Vec<FaultInterval> {
     let max_gap = RECONCILE_GAP_S.max(3.0 * gps_period);
     let mut all: Vec<&FaultInterval> = faults.iter().chain(dated).collect();
@@ -140,7 +143,7 @@ pub fn reconcile(faults: &[FaultInterval], dated: &[FaultInterval], gps_period: 
     let mut out: Vec<FaultInterval> = Vec::with_capacity(all.len());
     for iv in all {
         match out.last_mut() {
-            Some(last) if iv.start <= last.end || (last.kind == iv.kind && iv.start - last.end <= max_gap) => {
+            Some(last) if iv.start <= last.end || (same_kind(last.kind, iv.kind) && iv.start - last.end <= max_gap) => {
                 *last = last.clone().merged(iv);
             }
             _ => out.push(iv.clone()),
@@ -151,6 +154,13 @@ pub fn reconcile(faults: &[FaultInterval], dated: &[FaultInterval], gps_period: 
 
 /// s: see [`reconcile`].
 pub const RECONCILE_GAP_S: f64 = 2.0;
+
+/// Kinds [`reconcile`] joins across a short gap: the same, or a stale fix
+/// and no fix.
+fn same_kind(a: &str, b: &str) -> bool {
+    let no_fresh_fix = |k: &str| matches!(k, "gps_outage" | "gps_stale");
+    a == b || (no_fresh_fix(a) && no_fresh_fix(b))
+}
 
 /// The spans a detector dated once their fault had ended (see
 /// [`Detector::retro_since`]): from the fault's onset to the row that

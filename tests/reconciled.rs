@@ -86,6 +86,13 @@ fn the_audit_reports_the_dated_drag_off_as_one_reconciled_interval() {
     let off = iv.peak_offset.unwrap();
     // 0.89 m/s for 95.5 s, less half the 3 s build-up: 84 m.
     assert!((75.0..95.0).contains(&off), "peak offset {off} m");
+    // The flight's first fault, a 9.7 s frozen fix whose records also
+    // drop, alternates between stale and no fix at every epoch: 161 causal
+    // intervals, one reconciled. The whole list is those two faults.
+    assert!(report.faults.len() > 100, "{} causal intervals", report.faults.len());
+    assert_eq!(report.reconciled.len(), 2, "{:?}", report.reconciled);
+    let frozen = &report.reconciled[0];
+    assert!(frozen.start >= f.faults[0].start_log && frozen.end <= f.faults[0].end_log + 1.0, "{frozen:?}");
 }
 
 #[test]

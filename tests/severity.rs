@@ -56,6 +56,13 @@ fn reconcile_joins_flicker_of_one_kind_only() {
     assert_eq!((r[2].kind, r[2].severity), ("gps_outage", "medium"));
     // At 1 Hz GPS the gap allowed is 3 periods.
     assert_eq!(reconcile(&causal[..3], &[], 2.0).len(), 1);
+    // A frozen receiver whose records also drop: a stale fix and no fix
+    // alternating at every epoch are one interval, of the first's kind.
+    let frozen: Vec<_> = (0..10).map(|i| interval(50.0 + 0.2 * i as f64, 50.1 + 0.2 * i as f64, if i % 2 == 0 { "gps_stale" } else { "gps_outage" }, None, "")).collect();
+    let r = reconcile(&frozen, &[], 0.2);
+    assert_eq!(r.len(), 1, "{r:?}");
+    assert_eq!((r[0].start, r[0].kind, r[0].rows), (50.0, "gps_stale", 10));
+    assert!((r[0].end - 51.9).abs() < 1e-9);
 }
 
 #[test]
