@@ -5,8 +5,6 @@
 //! (`Detector::retro_since`); the audit's `reconciled` intervals and the
 //! battery's `FlightResult::reconciled` label the rows from then on. The
 //! causal verdict (`status`, `faults`) is untouched.
-mod common;
-
 use navguard::audit::{audit_bytes, RetroSpans};
 use navguard::battery::{self, Flight, FlightResult, Split};
 use navguard::{Config, Detector};
