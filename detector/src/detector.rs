@@ -2009,7 +2009,8 @@ fn feed_baro(kf: &mut Kf, ind: &mut IndicatorEngine, baro: f64, prev_r: f64, nor
 /// reconciled verdict labels the rows from then to the end as the fault;
 /// the causal verdict is untouched. Only with the `dated` feature: the
 /// core wasm module is the streaming API, whose verdict is causal, and
-/// leaves the dating to the audit and lab modules (there it is empty).
+/// leaves the dating to the audit and lab modules; without the feature
+/// `Dating` is an empty struct whose methods do nothing.
 #[cfg(feature = "dated")]
 #[derive(Clone, Debug, Default)]
 struct Dating {
