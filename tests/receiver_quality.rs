@@ -149,7 +149,11 @@ fn a_declaration_ends_with_the_first_usual_fix_after_a_data_gap() {
 /// its reduced weight; the first usual fix after it jumped back to the
 /// truth and was flagged as a step until the 60 s coast limit (121
 /// epochs). A jump within `DECLARED_RETURN_S` of a declared-degraded fix
-/// is the receiver's return: the filter re-anchors on it.
+/// is the receiver's return: the filter re-anchors on it. Also the guard
+/// that the slow windows (`drift`, `ramp`) take no start from a fix the
+/// receiver declares degraded: with the drift's held start (session 27)
+/// and such a start, the baro drift test called 4.5 s of the 60 s after
+/// the stretch (9 epochs).
 #[test]
 fn the_jump_back_after_a_degraded_stretch_is_its_end_not_a_step() {
     let f = Flight::draw(Split::Tune, 150);

@@ -3069,8 +3069,13 @@ impl Detector {
             self.consistency.track.learn();
             self.consistency.baro_gps_level.learn();
             self.consistency.baro_dop_level.learn();
-            self.consistency.baro_drift.learn();
-            self.consistency.ramp.learn();
+            // The slow windows take no start from a fix the receiver
+            // declares degraded: its offset would read as a drift or a
+            // ramp once the receiver is back (tests/receiver_quality.rs).
+            if !declared {
+                self.consistency.baro_drift.learn();
+                self.consistency.ramp.learn();
+            }
             self.consistency.drag_end.learn();
         }
         let fed = if step.reset {

@@ -395,7 +395,7 @@ impl RampTest {
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn learn(&mut self) {
         let Some(e) = self.pending.take().filter(|_| !self.judging) else { return };
-        self.window.enter(e);
+        self.window.enter(e, SPAN_S);
         let w = (self.dt / TAU_S).fmin(1.0);
         if self.dev.is_finite() && self.jump_t != Some(self.t) {
             let usual = if self.dev_ms > 0.0 { self.dev_ms.sqrt() } else { DEV0_M };

@@ -105,12 +105,14 @@ impl Window {
         (start, recent)
     }
 
-    /// A normal epoch's entry joins the window.
-    pub fn enter(&mut self, e: Entry) {
+    /// A normal epoch's entry joins the window, whose start is kept at
+    /// most `span` true s back (`SPAN_S`; longer holds it, see `drift`).
+    #[cfg_attr(navguard_cold_size, optimize(size))]
+    pub fn enter(&mut self, e: Entry, span: f64) {
         if self.ring.last().is_some_and(|l| e.t - l.t > RESTART_S) {
             self.ring.clear();
         }
-        keep(&mut self.ring, e, SPAN_S);
+        keep(&mut self.ring, e, span);
     }
 }
 
@@ -195,7 +197,7 @@ mod tests {
         for i in 0..=400 {
             let e = at(i as f64 * 0.1, i as f64);
             w.note(e);
-            w.enter(e);
+            w.enter(e, SPAN_S);
         }
         // At 40 s: the start is 30 s back (entries are a second apart).
         let (start, recent) = w.note(at(40.1, 0.0));
@@ -205,11 +207,11 @@ mod tests {
         // after the gap restarts the window.
         let (start, _) = w.note(at(60.0, 0.0));
         assert_eq!(start.map(|s| s.t), Some(10.0));
-        w.enter(at(60.0, 0.0));
+        w.enter(at(60.0, 0.0), SPAN_S);
         assert_eq!(w.note(at(60.1, 0.0)).0.map(|s| s.t), None);
         // A start older than MAX_REF_S is dropped.
         let mut w = Window::default();
-        w.enter(at(0.0, 0.0));
+        w.enter(at(0.0, 0.0), SPAN_S);
         assert!(w.note(at(119.0, 0.0)).0.is_some() && w.note(at(121.0, 0.0)).0.is_none());
     }
 
