@@ -2,10 +2,12 @@
 //! position's ramp (`ramp`).
 //!
 //! Each judges the change of a smoothed level over the last `SPAN_S` (true
-//! time) against the level at the window's start, and the change over the
+//! time, or longer while the start is held) against the level at the
+//! window's start, and the change over the
 //! last `RECENT_S` for its rate. The start is kept from normal epochs only
 //! (`enter`), so while a fault is flagged it stays on the level from before
-//! the fault; the first normal epoch after a gap of `RESTART_S` (another
+//! the fault (the drift test also holds it while it suspects one, see
+//! `drift`); the first normal epoch after a gap of `RESTART_S` (another
 //! sensor's episode) restarts it, as its start may sit in that fault's
 //! unflagged onset; a start older than `MAX_REF_S` is dropped, so a long
 //! episode does not judge the level against one from minutes ago. The
@@ -107,6 +109,8 @@ impl Window {
 
     /// A normal epoch's entry joins the window, whose start is kept at
     /// most `span` true s back (`SPAN_S`; longer holds it, see `drift`).
+    /// Built for size in the core module (issue 15's budget: the span
+    /// argument cost 11 B over it inlined).
     #[cfg_attr(navguard_cold_size, optimize(size))]
     pub fn enter(&mut self, e: Entry, span: f64) {
         if self.ring.last().is_some_and(|l| e.t - l.t > RESTART_S) {
