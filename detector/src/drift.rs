@@ -32,8 +32,10 @@
 //! is, and the change from it grows with the drift until the call (battery
 //! eval #138, 0.14 m/s for 97 s: none of 1,825 epochs flagged, then 64%).
 //! The recent rate that confirms a call is scaled to the window's actual
-//! span, so a constant rate reads the same over both. Nothing learns while
-//! the start is held (σ learns from changes over about `SPAN_S` only).
+//! span, so a constant rate reads the same over both. σ learns only from
+//! changes spanning at most 1.5 `SPAN_S`, so a start held past 45 s stops
+//! its learning (before that it learns from the drift winsorised, as it
+//! does from any unflagged one).
 //!
 //! Only epochs the detector called normal enter the window, and none while
 //! a drift is being judged (from the statistic reaching `DRIFT_Z` until it
