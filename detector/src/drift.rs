@@ -376,15 +376,19 @@ mod tests {
             .collect()
     }
 
+    /// Both levels drifting at `rate` m/s from `a` to `b` s, 0 outside.
+    fn drift_on_both(a: f64, b: f64, rate: f64) -> impl Fn(f64) -> [f64; 2] {
+        move |t| {
+            let x = if (a..b).contains(&t) { rate * (t - a) } else { 0.0 };
+            [x, x]
+        }
+    }
+
     #[test]
     fn a_drift_from_the_start_is_flagged_and_ends_when_the_baro_is_back() {
         let mut d = DriftTest::default();
         // 0.4 m/s on both levels from t = 5 s to 65 s, then back to 0.
-        let lvl = |t: f64| {
-            let x = if (5.0..65.0).contains(&t) { 0.4 * (t - 5.0) } else { 0.0 };
-            [x, x]
-        };
-        let s = run(&mut d, 0.0, 1200, 10.0, &lvl);
+        let s = run(&mut d, 0.0, 1200, 10.0, &drift_on_both(5.0, 65.0, 0.4));
         // At t = 40 s the window holds 30 s of drift: 12 m over σ ≤ 2.5.
         assert!(s[400] >= DRIFT_Z, "{}", s[400]);
         // Near the end, measured from before the drift: 23.6 m less the
@@ -602,11 +606,7 @@ mod tests {
         // change from it grows with the drift: the call comes at 3σ, 3 m
         // (37.5 s) plus the smoothing's lag: 239.4 s.
         let mut d = DriftTest::default();
-        let lvl = |t: f64| {
-            let x = if (200.0..300.0).contains(&t) { 0.08 * (t - 200.0) } else { 0.0 };
-            [x, x]
-        };
-        let s = run(&mut d, 0.0, 4000, 10.0, &lvl);
+        let s = run(&mut d, 0.0, 4000, 10.0, &drift_on_both(200.0, 300.0, 0.08));
         assert!(s[..2000].iter().all(|x| !(*x >= SUSPECT_Z)), "calm levels");
         let first = s.iter().position(|x| *x >= DRIFT_Z).unwrap();
         assert!((2390..2400).contains(&first), "called at {first}");
