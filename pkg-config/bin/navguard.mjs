@@ -18,7 +18,7 @@ import { streamAudit } from '../lib/stream-audit.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
 import { CliError, AtomicOutput, openInput, readSmall, walkLogs, writeAtomic } from '../lib/files.mjs';
 import { parseArgs, suggest } from '../lib/args.mjs';
-import { verdictOf, faultList, flightSeries, renderReport, qualityLabel, fmtUtc, fmtSince, checkedWithoutGps } from '../lib/html-report.mjs';
+import { verdictOf, faultList, reconciledIfDifferent, intervalLine, flightSeries, renderReport, qualityLabel, fmtUtc, fmtSince, checkedWithoutGps } from '../lib/html-report.mjs';
 
 const require = createRequire(import.meta.url);
 const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'node.cjs'));
@@ -160,12 +160,16 @@ function audit(file, opt) {
   if (report.missing.length) L.push(`  missing inputs: ${report.missing.join(', ')}`);
   L.push(report.gpsAvailable ? `  flagged GPS epochs: ${(100 * report.flaggedGpsEpochFraction).toFixed(2)}%` : `  flagged GPS epochs: none to judge (no GPS fix in the log)\n  ${checkedWithoutGps(report)}`);
   L.push(`  fault intervals: ${faults.length}`);
-  for (const f of faults.slice(0, 20)) {
-    const sev = typeof f.severity === 'string' ? `  ${f.severity}` : '';
-    const off = Number.isFinite(f.peakOffset) ? `  peak offset ${f.peakOffset.toFixed(1)} ${f.offsetUnit || ''}` : '';
-    L.push(`    ${(f.start - t0).toFixed(2).padStart(9)} - ${(f.end - t0).toFixed(2).padStart(9)} s  ${f.kind.padEnd(10)}${sev}${off}  peak F ${f.peakF.toFixed(2)}  driver ${f.driver} (${f.indicator})`);
-  }
+  for (const f of faults.slice(0, 20)) L.push(intervalLine(f, t0));
   if (faults.length > 20) L.push(`    ... ${faults.length - 20} more (use --json)`);
+  // The whole-log verdict, when it differs: flicker joined, and faults the
+  // detector saw end dated from their onset.
+  const rec = reconciledIfDifferent(report);
+  if (rec) {
+    L.push(`  reconciled over the whole log: ${rec.length} interval${rec.length === 1 ? '' : 's'}`);
+    for (const f of rec.slice(0, 20)) L.push(intervalLine(f, t0));
+    if (rec.length > 20) L.push(`    ... ${rec.length - 20} more (use --json)`);
+  }
   if ((report.modes || []).length) L.push(`  flight modes: ${report.modes.slice(0, 12).map((m) => `${fmtSince(m.t - t0)} ${m.mode}`).join(', ')}${report.modes.length > 12 ? `, ... (${report.modes.length} in all)` : ''}`);
   const alerts = (report.messages || []).filter((m) => m.level === 'error' || m.level === 'warning');
   if ((report.messages || []).length) L.push(`  autopilot messages: ${report.messages.length} (${alerts.length} warnings or errors)`);

@@ -8,14 +8,16 @@
 //   renderReport({ title, version, generated, flights: [{ name, report, series, error }] }) -> html
 
 /**
- * One word for a report: `faults` (at least one interval), `clean`, or
+ * One word for a report: `faults` (at least one interval, causal or
+ * reconciled over the whole log: a drag-off the detector followed and
+ * dated only at its end is a fault of the flight), `clean`, or
  * `no verdict` when the log has no GPS fix to judge, so a log the detector
  * could not judge is never shown as a clean flight.
  */
 export function verdictOf(report) {
   if (!report) return 'unreadable';
   if (!report.gpsAvailable) return 'no verdict';
-  return faultList(report).length > 0 ? 'faults' : 'clean';
+  return faultList(report).length > 0 || reconciledCount(report) > 0 ? 'faults' : 'clean';
 }
 
 /**
@@ -27,6 +29,28 @@ export function verdictOf(report) {
  */
 export function faultList(report) {
   return (report && report.faults) || [];
+}
+
+/**
+ * The whole-log reconciled intervals when they differ from the causal ones
+ * (other spans or another count), else null: what the HTML report folds
+ * under its causal table and the CLI lists after its own.
+ */
+export function reconciledIfDifferent(report) {
+  const rec = report && Array.isArray(report.reconciled) ? report.reconciled : null;
+  const faults = faultList(report);
+  const same = (a, b) => a.start === b.start && a.end === b.end;
+  return !rec || (rec.length === faults.length && rec.every((r, i) => same(r, faults[i]))) ? null : rec;
+}
+
+/**
+ * One interval as a line of the CLI's text report: times in s since `t0`,
+ * kind, severity and peak offset when given, peak F, driver.
+ */
+export function intervalLine(f, t0) {
+  const sev = typeof f.severity === 'string' ? `  ${f.severity}` : '';
+  const off = Number.isFinite(f.peakOffset) ? `  peak offset ${f.peakOffset.toFixed(1)} ${f.offsetUnit || ''}` : '';
+  return `    ${(f.start - t0).toFixed(2).padStart(9)} - ${(f.end - t0).toFixed(2).padStart(9)} s  ${f.kind.padEnd(10)}${sev}${off}  peak F ${f.peakF.toFixed(2)}  driver ${f.driver} (${f.indicator})`;
 }
 
 /** How many intervals the whole-log reconciliation leaves, or null. */
@@ -409,10 +433,8 @@ function faultTable(report, t0) {
  * they are the same. Their rows are `tr.reconciled-interval`.
  */
 export function reconciledTable(report, t0) {
-  const rec = report && Array.isArray(report.reconciled) ? report.reconciled : null;
-  const faults = faultList(report);
-  const same = (a, b) => a.start === b.start && a.end === b.end;
-  if (!rec || (rec.length === faults.length && rec.every((r, i) => same(r, faults[i])))) return '';
+  const rec = reconciledIfDifferent(report);
+  if (!rec) return '';
   return `<details class="reconciled"><summary>Reconciled over the whole log: ${rec.length} interval${rec.length === 1 ? '' : 's'}</summary><p class="note">The causal intervals above are what the detector said as the samples came. Here, intervals of one kind less than 2 s apart are joined, and a fault the detector saw end without flagging it throughout (a drag-off it followed, a step held past its coast limit) is dated from its onset.</p>${intervalTable(rec, t0, 'reconciled-interval', 'reconciled sortable')}</details>`;
 }
 

@@ -33,6 +33,22 @@ test('verdicts: faults, clean, no verdict (no GPS), unreadable; every table coun
   assert.equal(H.fmtSince(725.25), '12:05.3');
 });
 
+test('the verdict word counts the reconciled intervals too; the CLI lists them when they differ', () => {
+  // A drag-off the detector followed and dated only at its end: no causal
+  // interval, one reconciled. The flight is not clean.
+  const dated = { ...fault, start: 102, end: 112.5 };
+  assert.equal(H.verdictOf({ ...base, faults: [], reconciled: [dated] }), 'faults');
+  assert.equal(H.verdictOf({ ...base, faults: [], reconciled: [] }), 'clean');
+  assert.deepEqual(H.reconciledIfDifferent({ ...base, faults: [], reconciled: [dated] }), [dated]);
+  assert.equal(H.reconciledIfDifferent({ ...base, faults: [fault], reconciled: [fault] }), null);
+  assert.equal(H.reconciledIfDifferent(base), null);
+  // Times since the log's start (t0 = 100 s), kind, severity, offset.
+  assert.equal(
+    H.intervalLine({ ...dated, severity: 'major', peakOffset: 7.25, offsetUnit: 'm' }, 100),
+    '         2.00 -     12.50 s  residual    major  peak offset 7.3 m  peak F 0.97  driver gps_position (R)',
+  );
+});
+
 test('thinning keeps a single spike; the robust range leaves it out', () => {
   const t = Array.from({ length: 10000 }, (_, i) => i / 100);
   const v = t.map((x) => Math.sin(x));
