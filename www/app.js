@@ -275,7 +275,11 @@ function renderVerdict(m) {
   const el = $('#verdict');
   el.dataset.verdict = v;
   el.hidden = false;
-  const head = v === 'faults' ? `${faults.length} fault interval${faults.length === 1 ? '' : 's'}, ${fmt(flagged, 1)} s flagged`
+  // A fault only the whole-log verdict holds (a drag-off the detector
+  // followed, dated at its end) has no causal interval to count.
+  const rec = r.reconciled || [];
+  const head = v === 'faults' && !faults.length ? `${rec.length} fault interval${rec.length === 1 ? '' : 's'} over the whole log, none flagged as the samples came`
+    : v === 'faults' ? `${faults.length} fault interval${faults.length === 1 ? '' : 's'}, ${fmt(flagged, 1)} s flagged`
     : v === 'clean' ? 'No navigation fault found' : 'No verdict: no GPS fix in this log';
   const when = fmtUtc(r.startUtc) ? `started ${fmtUtc(r.startUtc)}` : 'start time unknown (no GPS time in the log)';
   const mode = (r.modes || []).length ? ` · ${r.modes.length} flight mode${r.modes.length === 1 ? '' : 's'}` : '';
