@@ -2050,9 +2050,9 @@ impl Dating {
         self.retro = self.accepted_since.filter(|since| t - since <= POSITION_COAST_LONG_S);
     }
 
-    /// A fault that began at `since` (row s; NaN: none) ended at this row.
+    /// A fault that began at `since` (row s) ended at this row.
     fn date(&mut self, since: f64) {
-        self.retro = (!since.is_nan()).then_some(since);
+        self.retro = Some(since);
     }
 
     fn since(&self) -> Option<f64> {
@@ -2983,8 +2983,8 @@ impl Detector {
         let drag_since = self.consistency.drag_ended(fix.t, self.episode.active);
         let drag_end = drag_since.is_some();
         self.episode.long_coast |= self.consistency.drag_end.ruled_out();
-        if drag_end {
-            self.episode.dating.date(drag_since.unwrap_or(f64::NAN));
+        if let Some(since) = drag_since {
+            self.episode.dating.date(since);
             // The confirmation can take a step's onset for a drag-off's end
             // (a manoeuvre moved the velocity's mean; battery tune #599): the
             // offset re-anchored onto is kept like a coasted-out episode's,
