@@ -20,10 +20,26 @@ fn main() {
     // BPROBE_BARO=1: also print every baro row (t, value).
     let baro = std::env::var("BPROBE_BARO").is_ok();
     let mut det = Detector::new(Config::default()).unwrap();
+    // BPROBE_RETRO=1: only the dated spans, with the GPS epochs in each
+    // that are healthy (label 0) and faulty, and the causal status there.
+    let retro_only = std::env::var("BPROBE_RETRO").is_ok();
+    let mut seen: Vec<(f64, f64, u8)> = Vec::new();
     for s in &rows {
         let o = det.push(s).unwrap();
+        if o.gps_epoch {
+            seen.push((s.t, s.label, o.status));
+        }
         if let Some(since) = det.retro_since() {
-            println!("{:8.2} retro since {since:.2}", s.t);
+            let inside = seen.iter().filter(|e| e.0 >= since && e.0 < s.t);
+            let (mut ok, mut bad, mut flagged) = (0, 0, 0);
+            for e in inside {
+                if e.1 == 0.0 { ok += 1 } else { bad += 1 }
+                flagged += u32::from(e.2 != 0);
+            }
+            println!("{:8.2} retro since {since:.2} group {} healthy {ok} faulty {bad} flagged {flagged}", s.t, det.retro_group());
+        }
+        if retro_only {
+            continue;
         }
         if baro && s.baro.is_finite() {
             println!("{:8.2} baro {:.4}", s.t, s.baro);

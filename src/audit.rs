@@ -143,6 +143,18 @@ pub fn reconcile(faults: &[FaultInterval], dated: &[FaultInterval], gps_period: 
     let mut out: Vec<FaultInterval> = Vec::with_capacity(all.len());
     for iv in all {
         match out.last_mut() {
+            // A dated silence before a lost fix was called takes its rows
+            // from another kind's interval: those carried the last fix's
+            // verdict while no fix came (real log 09-10 at 61.5 s).
+            Some(last) if iv.rows == 0 && no_fresh_fix(iv.kind) && !same_kind(last.kind, iv.kind) && iv.start < last.end => {
+                last.end = last.end.min(iv.start);
+                *last = last.clone().closed();
+                if last.end <= last.start {
+                    *last = iv.clone();
+                } else {
+                    out.push(iv.clone());
+                }
+            }
             Some(last) if iv.start <= last.end || (same_kind(last.kind, iv.kind) && iv.start - last.end <= max_gap) => {
                 *last = last.clone().merged(iv);
             }
@@ -158,8 +170,12 @@ pub const RECONCILE_GAP_S: f64 = 2.0;
 /// Kinds [`reconcile`] joins across a short gap: the same, or a stale fix
 /// and no fix.
 fn same_kind(a: &str, b: &str) -> bool {
-    let no_fresh_fix = |k: &str| matches!(k, "gps_outage" | "gps_stale");
     a == b || (no_fresh_fix(a) && no_fresh_fix(b))
+}
+
+/// A kind of no fresh fix: none, or a stale one.
+fn no_fresh_fix(k: &str) -> bool {
+    matches!(k, "gps_outage" | "gps_stale")
 }
 
 /// The spans a detector dated once their fault had ended (see
@@ -190,19 +206,25 @@ impl RetroSpans {
     }
 
     /// The span dated at the row `det` just took (see [`Detector::retro_since`])
-    /// as a fault interval: a position fault (every span the detector dates
-    /// is one) whose peak offset is the GPS's jump back at its end. Its
-    /// `rows` are 0: they were judged before the span was dated.
+    /// as a fault interval: a position fault whose peak offset is the GPS's
+    /// jump back at its end; a slow fault (a baro drift, a position ramp)
+    /// from its onset to its end, with the offset there; a stuck baro from
+    /// its run's start; or the silence before an outage or a stale fix was
+    /// called, of its kind. Its `rows` are 0: they were judged before the
+    /// span was dated.
     fn interval(det: &Detector, o: &Output) -> Option<FaultInterval> {
         let since = det.retro_since().filter(|s| *s < o.t)?;
-        let (peak_offset, offset_unit) = offset_of("gps_position", &det.residuals());
+        let kind = kind_name(det.retro_kind());
+        let no_fix = kind != "residual";
+        let driver = if no_fix { "none" } else { DRIVER_NAMES[det.retro_group()] };
+        let (peak_offset, offset_unit) = offset_of(driver, &det.residuals());
         let iv = FaultInterval {
             start: since,
             end: o.t,
-            kind: "residual",
+            kind,
             peak_f: o.f,
-            driver: "gps_position",
-            indicator: "R",
+            driver,
+            indicator: if no_fix { "none" } else { "R" },
             rows: 0,
             peak_offset,
             offset_unit,
@@ -249,7 +271,10 @@ pub struct Report {
     /// `faults` reconciled over the whole log ([`reconcile`]): what a
     /// person reading the log afterwards should count as fault intervals,
     /// with the spans the detector dated once a fault ended (a drag-off
-    /// from its onset, a coasted-out step to its end; [`RetroSpans`]).
+    /// from its onset, a coasted-out step to its end, a slow drift or ramp
+    /// from its onset once its offset jumped back) or was called (a frozen
+    /// fix or a lost one from the first fix owed, a stuck baro from its
+    /// first repeat; [`RetroSpans`]).
     /// `faults` stays the causal verdict, as the streaming `push` gave it.
     pub reconciled: Vec<FaultInterval>,
     /// Pauses in which every sensor stopped (logging gaps).
@@ -833,6 +858,16 @@ pub fn audit_chunks(bytes: &[u8], cfg: &Config, keep_outputs: bool, chunk: usize
     Ok((report, all))
 }
 
+/// A fault interval's `kind` for a detector's `kind` code.
+fn kind_name(k: u8) -> &'static str {
+    match k {
+        kind::OUTAGE => "gps_outage",
+        kind::STALE => "gps_stale",
+        kind::DEGRADED => "gps_degraded",
+        _ => "residual",
+    }
+}
+
 fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Output, det: &Detector) {
     if o.status == 0 {
         if let Some(iv) = open.take() {
@@ -843,12 +878,7 @@ fn track(open: &mut Option<FaultInterval>, done: &mut Vec<FaultInterval>, o: &Ou
         return;
     }
     let no_fix = matches!(o.kind, kind::OUTAGE | kind::STALE);
-    let kind_name = match o.kind {
-        kind::OUTAGE => "gps_outage",
-        kind::STALE => "gps_stale",
-        kind::DEGRADED => "gps_degraded",
-        _ => "residual",
-    };
+    let kind_name = kind_name(o.kind);
     let ind = det.indicators();
     let driver = if no_fix { "none" } else { ind.r_driver().and_then(|g| DRIVER_NAMES.get(g).copied()).unwrap_or("none") };
     // R is ≈1 when clean and C ≈ 0.2: compare relative excess.

@@ -86,6 +86,32 @@ fn reconcile_joins_a_dated_span_to_the_intervals_it_overlaps() {
 }
 
 #[test]
+fn a_dated_silence_takes_its_rows_from_the_verdict_they_carried() {
+    // Real log 09-10 at 60-68 s: a residual interval whose last second is
+    // rows after the last fix, carrying its verdict, then the outage called
+    // at 62.6 s once the silence lasted an outage's timeout. The silence
+    // is dated from 61.5 s: the outage begins there, the residual interval
+    // ends there, and the outage's causal interval joins it.
+    let causal = [
+        interval(60.1, 62.6, "residual", Some(3.0), "m"),
+        interval(62.6, 67.8, "gps_outage", None, ""),
+    ];
+    let mut silence = interval(61.5, 62.6, "gps_outage", None, "");
+    silence.rows = 0;
+    let r = reconcile(&causal, &[silence], 0.2);
+    assert_eq!(r.len(), 2, "{r:?}");
+    assert_eq!((r[0].start, r[0].end, r[0].kind), (60.1, 61.5, "residual"));
+    assert!((r[0].duration_s - 1.4).abs() < 1e-9, "{r:?}");
+    assert_eq!((r[1].start, r[1].end, r[1].kind, r[1].rows), (61.5, 67.8, "gps_outage", 1));
+    // A silence that covers the whole interval before it replaces it.
+    let mut silence = interval(60.0, 62.6, "gps_outage", None, "");
+    silence.rows = 0;
+    let r = reconcile(&causal, &[silence], 0.2);
+    assert_eq!(r.len(), 1, "{r:?}");
+    assert_eq!((r[0].start, r[0].end, r[0].kind), (60.0, 67.8, "gps_outage"));
+}
+
+#[test]
 fn a_15_m_step_reports_its_offset_in_metres() {
     let sc = Scenario::with_fault(FaultKind::Step, 15.0, 100.0, 20.0, 1);
     let rows = simulate(&sc).unwrap();

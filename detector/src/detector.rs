@@ -770,8 +770,16 @@ impl Clock {
         if reports_no_fix && t - lf > 0.5 * self.gps_dt {
             return true;
         }
-        let auto = SILENT_OUTAGE_S.fmax(3.0 * self.gps_dt).fmax(self.gps_dt + 4.0 * self.gps_jitter) + 0.02;
-        flying && t - lf > timeout.unwrap_or(auto)
+        flying && t - lf > self.outage_silence(timeout)
+    }
+
+    /// How long a silence (s) makes an outage while flying: `timeout`, or
+    /// by default the longest of `SILENT_OUTAGE_S`, three GPS periods and
+    /// a period plus four of its jitters. Inlined: the core module's
+    /// `is_outage` stays as it was (issue 15's budget).
+    #[inline(always)]
+    fn outage_silence(&self, timeout: Option<f64>) -> f64 {
+        timeout.unwrap_or(SILENT_OUTAGE_S.fmax(3.0 * self.gps_dt).fmax(self.gps_dt + 4.0 * self.gps_jitter) + 0.02)
     }
 }
 
@@ -1542,6 +1550,32 @@ impl Consistency {
         (h || v).then_some(since)
     }
 
+    /// Whether the slow tests (the baro's drift, the position's ramp) are
+    /// judging a fault.
+    fn slow_judging(&self) -> [bool; 2] {
+        [self.baro_drift.judging(), self.ramp.judging()]
+    }
+
+    /// A slow test that called at this epoch (it was not judging `before`,
+    /// see `slow_judging`): when its fault began (row s, the fix's `t`
+    /// less its age in true s) and the group it condemns (2 the baro, 0
+    /// the position). The drift first: it is the baro's, and a vertical
+    /// ramp it saw too is the same change.
+    fn slow_onset(&self, before: [bool; 2], t: f64) -> Option<(f64, usize)> {
+        let (age, g) = if !before[0] && self.baro_drift.judging() {
+            // A stuck baro's onset is its run's start (`Dating::stuck`).
+            if self.baro_flat.stuck() {
+                return None;
+            }
+            (self.baro_drift.onset_age()?, 2)
+        } else if !before[1] && self.ramp.judging() {
+            (self.ramp.onset_age()?, 0)
+        } else {
+            return None;
+        };
+        Some((t - age / self.rate.scale, g))
+    }
+
     /// A position episode that opened at this epoch, or an episode whose
     /// position was first withheld at it (`opened_on_position`), on a jump
     /// off the velocity track arms the drag-off's end
@@ -2004,6 +2038,12 @@ fn feed_baro(kf: &mut Kf, ind: &mut IndicatorEngine, baro: f64, prev_r: f64, nor
     Ok(())
 }
 
+/// How long a slow fault's call is kept for its jump back after its test
+/// stopped judging it, row s (see `Dating::slow`): the release comes on the
+/// smoothed level, a smoothing's time (2 s) after the jump.
+#[cfg(feature = "dated")]
+const SLOW_GRACE_S: f64 = 5.0;
+
 /// When the faults a detector saw end, without flagging them throughout,
 /// began (issue 14 item 4: `Detector::retro_since`): the audit's
 /// reconciled verdict labels the rows from then to the end as the fault;
@@ -2024,8 +2064,33 @@ struct Dating {
     accepted_since: Option<f64>,
     /// The onset (row s) of the fault that ended at this row, if dated: a
     /// coasted-out offset undone, or a drag-off's end, whose age its
-    /// velocity's jump tells. It lives one row.
+    /// velocity's jump tells; or a slow fault's, called earlier, whose
+    /// offset jumped back at this row (see `slow`). It lives one row.
     retro: Option<f64>,
+    /// The group (`DRIVER_NAMES`) and the kind (`kind`) of the fault
+    /// `retro` dates.
+    group: usize,
+    kind: u8,
+    /// The baro's stuck run being called is dated (once per run).
+    stuck_dated: bool,
+    /// A slow fault called, dated only when the GPS or the baro then
+    /// jumps back (`slow_returned`): the offset that grew was the fault's,
+    /// undone at once. A slow test's false call on a wandering healthy
+    /// error fades instead (battery tune #1006, eval #102: dated from the
+    /// call, 30 and 16 s of healthy epochs each).
+    slow: Option<SlowCall>,
+}
+
+/// A slow fault called (see `Consistency::slow_onset`), row s.
+#[cfg(feature = "dated")]
+#[derive(Clone, Copy, Debug)]
+struct SlowCall {
+    /// Its onset.
+    since: f64,
+    /// Its group (`DRIVER_NAMES`).
+    group: usize,
+    /// The last row its test judged it.
+    last: f64,
 }
 
 #[cfg(feature = "dated")]
@@ -2033,6 +2098,8 @@ impl Dating {
     /// A new row: nothing dated yet.
     fn clear(&mut self) {
         self.retro = None;
+        self.group = 0;
+        self.kind = kind::RESIDUAL;
     }
 
     /// An offset is kept (`Episode::accepted`) whose fault began at `since`.
@@ -2055,8 +2122,76 @@ impl Dating {
         self.retro = Some(since);
     }
 
+    /// A slow fault of group `g` called at row `t` (s) began at the row s
+    /// `onset` gives, if any (only evaluated with the feature: the
+    /// onset's fit is no part of the streaming module). The earliest
+    /// call's onset is kept while its test judges (see `slow`).
+    fn called(&mut self, t: f64, onset: impl FnOnce() -> Option<(f64, usize)>) {
+        if self.slow.is_none() {
+            self.slow = onset().map(|(since, group)| SlowCall { since, group, last: t });
+        }
+    }
+
+    /// At row `t` (s), `at` gives whether a slow test judges a fault and
+    /// whether the GPS or the baro jumped back. A call is forgotten
+    /// `SLOW_GRACE_S` after its test stopped judging without a jump back;
+    /// a jump back dates it from its onset to here (unless a fault that
+    /// ended here began earlier).
+    fn slow_epoch(&mut self, t: f64, at: impl FnOnce() -> (bool, bool)) {
+        let Some(call) = self.slow.as_mut() else { return };
+        let (judging, back) = at();
+        if judging {
+            call.last = t;
+        } else if t - call.last > SLOW_GRACE_S {
+            self.slow = None;
+            return;
+        }
+        if back {
+            let call = *call;
+            self.slow = None;
+            if self.retro.is_none_or(|r| call.since < r) {
+                (self.retro, self.group) = (Some(call.since), call.group);
+            }
+        }
+    }
+
+    /// `at` gives (`t`, `last_fix`, `gps_dt`, `silence`, `kind`), read only
+    /// with the feature: no fresh fix has come since row s `last_fix`,
+    /// `kind` (an outage or a stale fix) called at row `t`: the receiver went silent, or
+    /// repeated its fix, from the next fix it owed (half a GPS period
+    /// `gps_dt` s on), and at most the `silence` s that make an outage
+    /// back (a silence on the ground is none: real log 09-10 at 201.6 s,
+    /// called 3.1 s later, once flying). Not when it owed none before (an
+    /// outage the receiver's status declared at once).
+    fn silent(&mut self, at: impl FnOnce() -> (f64, f64, f64, f64, u8)) {
+        let (t, last_fix, gps_dt, silence, kind) = at();
+        if t - last_fix > 1.5 * gps_dt {
+            (self.retro, self.kind) = (Some((last_fix + 0.5 * gps_dt).fmax(t - silence)), kind);
+        }
+    }
+
+    /// `at` gives whether, at a fault verdict, the baro's reading is held
+    /// (`stuck`), and since its run's first sample at row s `since`. Dated
+    /// once per run: the run is the fault, from its start (a repeat is
+    /// certain, not a fit).
+    fn stuck(&mut self, at: impl FnOnce() -> (bool, f64)) {
+        let (stuck, since) = at();
+        if stuck && !self.stuck_dated {
+            (self.retro, self.group) = (Some(since), 2);
+        }
+        self.stuck_dated = stuck;
+    }
+
     fn since(&self) -> Option<f64> {
         self.retro
+    }
+
+    fn group(&self) -> usize {
+        self.group
+    }
+
+    fn kind(&self) -> u8 {
+        self.kind
     }
 }
 
@@ -2071,8 +2206,18 @@ impl Dating {
     fn kept(&mut self, _: Option<f64>) {}
     fn undone(&mut self, _: f64) {}
     fn date(&mut self, _: f64) {}
+    fn called(&mut self, _: f64, _: impl FnOnce() -> Option<(f64, usize)>) {}
+    fn slow_epoch(&mut self, _: f64, _: impl FnOnce() -> (bool, bool)) {}
+    fn silent(&mut self, _: impl FnOnce() -> (f64, f64, f64, f64, u8)) {}
+    fn stuck(&mut self, _: impl FnOnce() -> (bool, f64)) {}
     fn since(&self) -> Option<f64> {
         None
+    }
+    fn group(&self) -> usize {
+        0
+    }
+    fn kind(&self) -> u8 {
+        kind::RESIDUAL
     }
 }
 
@@ -2576,12 +2721,27 @@ impl Detector {
 
     /// When the last `push` ended a fault that was not flagged throughout
     /// (an offset the detector stopped judging, undone by the GPS's jump
-    /// back; or a drag-off's end, its age told by its velocity's jump):
+    /// back; a drag-off's end, its age told by its velocity's jump; or a
+    /// slow drift or ramp, called late, whose offset jumped back here):
     /// the row time (s) the fault began. For a whole-log audit's
     /// reconciled verdict, which labels the rows from then to this one as
     /// the fault; the causal `status` is untouched.
     pub fn retro_since(&self) -> Option<f64> {
         self.episode.dating.since()
+    }
+
+    /// The group (index into `indicators::DRIVER_NAMES`) of the fault
+    /// `retro_since` dates: the position's, or the baro's for a baro drift
+    /// (or a vertical drag-off the baro drift test called).
+    pub fn retro_group(&self) -> usize {
+        self.episode.dating.group()
+    }
+
+    /// The kind (`kind`) of the fault `retro_since` dates: `RESIDUAL`, or
+    /// `OUTAGE` or `STALE` for the silence before an outage or a stale fix
+    /// was called.
+    pub fn retro_kind(&self) -> u8 {
+        self.episode.dating.kind()
     }
 
     /// Latest indicators (per-group detail included).
@@ -2776,6 +2936,10 @@ impl Detector {
             o.status = 1;
             // A repeated fix says the receiver still reports one: frozen.
             o.kind = if s.has_fix() { kind::STALE } else { kind::OUTAGE };
+            if let (false, Some(lf)) = (in_outage, self.clock.last_fix) {
+                let (clock, timeout) = (&self.clock, self.cfg.outage_timeout);
+                self.episode.dating.silent(|| (t, lf, clock.gps_dt, clock.outage_silence(timeout), o.kind));
+            }
             o.f = 1.0;
             self.ind.clear_imu();
             self.episode.outage(self.clock.last_fix);
@@ -2911,6 +3075,7 @@ impl Detector {
         let learn_rate = !self.episode.active && !self.episode.receiver_lost;
         let imu_dense = self.imu_noise.period > 0.0 && self.imu_noise.period <= IMU_MAX_PERIOD_S;
         let epoch = EpochState { vel_withheld, baro_withheld: self.episode.withheld.baro(), learn_rate, declared, imu_dense, speed_claim, accepted: self.episode.accepted.is_some(), mean_hold: self.episode.mean_hold };
+        let slow_before = self.consistency.slow_judging();
         let (mut ind, alt_back) = self.consistency.tests(&mut self.ind, &fix, epoch);
         // A position-only episode that opened on a step's onset lasts while
         // the fix stays off the coasted filter (`Episode::held`): the
@@ -2973,6 +3138,16 @@ impl Detector {
         // during the fault had re-based on the faulty level (battery tune
         // #175: a 7.9 m step for 66 s, its end flagged for 5.6 s).
         let baro_back = vertical == Some(true);
+        // The slow fault called is dated at a jump back (`Dating::slow`),
+        // read before the returns restart the slow tests: a ramp's or a
+        // drift's collapse, or the GPS altitude or the baro back. Not a
+        // ramp's release on its fading (`RampTest::returned` says either).
+        let c = &self.consistency;
+        self.episode.dating.slow_epoch(fix.t, || {
+            let drift_fell = slow_before[0] && c.baro_drift.released_growing();
+            let back = !declared && (c.ramp.jumped_back_now() || drift_fell || alt_back || vertical.is_some());
+            (c.slow_judging().contains(&true), back)
+        });
         if baro_back {
             restart_baro(Some(&mut *kf), &mut self.ind, &mut self.episode.withheld, &mut self.last_est);
             // The drift window's start may sit on the fault's level (one
@@ -3037,6 +3212,19 @@ impl Detector {
         let pos_before = self.episode.withheld.gps_pos();
         let mut step = self.episode.step(fix.t, fault, &ev, self.cfg.max_coast, self.oracle);
         step.reset |= restart;
+        // A slow fault flagged from its call on began before it: its onset
+        // is kept for the reconciled verdict (issue 14 item 4), which dates
+        // it if the offset then jumps back (`Dating::slow`).
+        // Not on a fix the receiver declares degraded: the slow tests judge
+        // against the GPS, which it disowns (real log 26-11: a baro drift
+        // called and confirmed inside its 64 s degraded stretch).
+        if step.fault && !step.reset && !self.oracle && !declared {
+            let c = &self.consistency;
+            self.episode.dating.called(fix.t, || c.slow_onset(slow_before, fix.t));
+        }
+        // A stuck baro's run is the fault from its first sample.
+        let flat = &self.consistency.baro_flat;
+        self.episode.dating.stuck(|| (step.fault && flat.stuck(), flat.run_start()));
         // The position withheld from this epoch on, whether the episode
         // opened here or on another group: a vertical drag-off is first
         // blamed on the baro (the GPS altitude and its Doppler integral

@@ -134,6 +134,13 @@ const GPS_CONFIRM: f64 = 2.0;
 /// Chosen on the tune split (1.5 and 2.0 tried; 2.0 missed 36 more epochs
 /// there and flagged 149 more false ones).
 const SUSPECT_Z: f64 = 1.5;
+/// See `DriftTest::released_growing`, true s: a slow drift grows by
+/// `GROW_Z` in a few seconds, and its release follows the jump back by a
+/// few more.
+const GREW_S: f64 = 8.0;
+/// The statistic a drift reached for its release to read as its level's
+/// jump back (see `DriftTest::released_growing`): a call that grew.
+const FELL_Z: f64 = DRIFT_Z + 2.0 * GROW_Z;
 /// Wind bound in the motion allowance, m/s (see the module docs).
 const WIND_M_S: f64 = 3.0;
 
@@ -351,6 +358,39 @@ impl DriftTest {
         }
         let sigma = [self.sigma(0), self.sigma(1)];
         learn_axes(&mut self.ms, &self.last, sigma, (self.dt / TAU_S).fmin(1.0));
+    }
+
+    /// A drift is being judged.
+    pub fn judging(&self) -> bool {
+        self.judging
+    }
+
+    /// Asked at the epoch a drift judged until the last one was released:
+    /// whether it had grown past `FELL_Z` and was still growing within
+    /// `GREW_S` of the release, so its level fell back at once (the
+    /// release waits for the smoothing to follow a jump: about `SMOOTH_S`
+    /// per e-fold). A healthy error mistaken for a drift stops growing and
+    /// fades over tens of seconds, or is called for a blip (battery tune
+    /// #1020, a 2 Hz receiver: 3.1σ for three fixes).
+    pub fn released_growing(&self) -> bool {
+        !self.judging && self.peak >= FELL_Z && self.t - self.t_grew <= GREW_S
+    }
+
+    /// At the epoch a drift is called: how long before it (true s) the
+    /// drift began (`Window::onset_age`); None when nothing is called here.
+    /// Fitted on each entry's change to the call net of the motion's
+    /// allowance, both levels weighted by their σ along the change called:
+    /// a manoeuvre's move of the baro's healthy error is no onset (eval
+    /// #81: the raw levels moved at a speed change 14 s before a vertical
+    /// drag-off, and dated it from there).
+    pub fn onset_age(&self) -> Option<f64> {
+        let e = self.pending.filter(|_| self.judging)?;
+        let full = net_change(&self.window.start()?, &e, 1.0);
+        let w: [f64; 2] = core::array::from_fn(|k| full[k] / self.sigma(k).powi(2));
+        self.window.onset_age(&e, |p| {
+            let c = net_change(p, &e, 1.0);
+            -(w[0] * c[0] + w[1] * c[1])
+        })
     }
 }
 

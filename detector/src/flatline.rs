@@ -117,6 +117,11 @@ impl Flatline {
         self.called
     }
 
+    /// Time of the current run's first sample, s (NaN before any).
+    pub fn run_start(&self) -> f64 {
+        self.t0
+    }
+
     /// Forget the reading (a data gap, a filter restart): the next one
     /// starts a run; the learnt share stays.
     pub fn restart(&mut self) {

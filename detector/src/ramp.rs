@@ -390,6 +390,27 @@ impl RampTest {
         self.returned
     }
 
+    /// The last epoch ended a ramp by a jump back (a fix off the smoothed
+    /// track, see `JUMP_Z`), not by fading below the release.
+    pub fn jumped_back_now(&self) -> bool {
+        self.returned && self.jump_t == Some(self.t)
+    }
+
+    /// A ramp is being judged.
+    pub fn judging(&self) -> bool {
+        self.judging
+    }
+
+    /// At the epoch a ramp is called: how long before it (true s) the ramp
+    /// began (`Window::onset_age` along the calling arm's change); None
+    /// when nothing is called here.
+    pub fn onset_age(&self) -> Option<f64> {
+        let e = self.pending.filter(|_| self.judging)?;
+        let e0 = self.window.start()?;
+        let u = core::array::from_fn(|a| e.x[a] - e0.x[a]);
+        self.window.onset_age(&e, |p| dot(self.arm.min(1), &u, &p.x))
+    }
+
     /// The last epoch was normal: its entry enters the window (see
     /// `window::Window::enter`), and σ learns from its change.
     #[cfg_attr(navguard_cold_size, optimize(size))]

@@ -275,22 +275,26 @@ mod tests {
     }
 
     /// `Debug` text with the fields a snapshot does not keep (the learning
-    /// stage's scratch buffers and cost counters) cut out.
+    /// stage's scratch buffers and cost counters, and the episode's dating
+    /// for the reconciled verdict) cut out: each up to the comma or the
+    /// closing bracket that ends it.
     fn without_skipped(debug: &str) -> String {
         let mut s = debug.to_string();
-        for field in ["train_x: ", "train_y: ", "cost: "] {
+        for field in ["train_x: ", "train_y: ", "cost: ", "dating: "] {
             let Some(start) = s.find(field) else { panic!("no {field} in the Debug text") };
             let mut depth = 0;
-            let mut end = start;
+            let mut end = s.len();
             for (i, c) in s[start..].char_indices() {
                 match c {
-                    '[' | '{' => depth += 1,
-                    ']' | '}' => {
-                        depth -= 1;
-                        if depth == 0 {
-                            end = start + i + 1;
-                            break;
-                        }
+                    '[' | '{' | '(' => depth += 1,
+                    ']' | '}' | ')' if depth == 0 => {
+                        end = start + i;
+                        break;
+                    }
+                    ']' | '}' | ')' => depth -= 1,
+                    ',' if depth == 0 => {
+                        end = start + i;
+                        break;
                     }
                     _ => {}
                 }

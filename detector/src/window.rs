@@ -16,7 +16,8 @@
 //!
 //! Their σ are learnt the same way too (`learn_ms`): slowly, from a prior,
 //! winsorised at 3σ, so a fault growing inside the window cannot teach it
-//! its own size.
+//! its own size. At a call, the window's entries date the change's onset
+//! (`onset_age`) for the whole-log reconciled verdict.
 use crate::MinMax;
 use serde::{Deserialize, Serialize};
 
@@ -32,6 +33,9 @@ const STEP_S: f64 = 1.0;
 const RESTART_S: f64 = 5.0;
 /// Oldest window start kept while no normal epoch comes, true s.
 const MAX_REF_S: f64 = 120.0;
+/// Least share of a level's variance over the window that the hinge of
+/// `Window::onset_age` explains for its onset to be dated.
+const ONSET_R2: f64 = 0.75;
 
 /// The vehicle's motion at an epoch (what the baro's healthy error moves
 /// with; see `drift`).
@@ -117,6 +121,47 @@ impl Window {
             self.ring.clear();
         }
         keep(&mut self.ring, e, span);
+    }
+
+    /// The window's start (its oldest normal entry), if any.
+    pub fn start(&self) -> Option<Entry> {
+        self.ring.first().copied()
+    }
+
+    /// How long before `e` (true s) the change the window judges at `e`
+    /// began: the hinge, flat and then a straight line to `e`, that fits
+    /// `level` over the window's entries and `e` best by least squares. A
+    /// change under way from the window's start dates from it (the hinge
+    /// at the first entry is the straight line). None when the best hinge
+    /// explains less than `ONSET_R2` of the level's variance: a healthy
+    /// error that wandered before the fault (a Gauss–Markov baro, a
+    /// step after a swing) has no onset this shape tells. For the
+    /// whole-log reconciled verdict (`Dating`): a slow fault is called
+    /// once it has grown over the window, seconds after it began. Only at
+    /// a call: O(entries²), at most `MAX_REF_S` entries.
+    pub fn onset_age(&self, e: &Entry, level: impl Fn(&Entry) -> f64) -> Option<f64> {
+        let pts: Vec<(f64, f64)> = self.ring.iter().chain(core::iter::once(e)).map(|p| (p.t, level(p))).collect();
+        let n = pts.len() as f64;
+        let mean = pts.iter().map(|p| p.1).sum::<f64>() / n;
+        let syy: f64 = pts.iter().map(|p| (p.1 - mean) * (p.1 - mean)).sum();
+        let mut best = (0.0, e.t);
+        for &(tau, _) in &pts[..pts.len() - 1] {
+            // y regressed on h = max(0, t − τ): the fit's gain over a flat
+            // line is cov(h, y)² / var(h) (sums, not means, as n is common).
+            let (mut sh, mut shh, mut sy, mut shy) = (0.0, 0.0, 0.0, 0.0);
+            for &(t, y) in &pts {
+                let h = (t - tau).fmax(0.0);
+                sh += h;
+                shh += h * h;
+                sy += y;
+                shy += h * y;
+            }
+            let (var, cov) = (shh - sh * sh / n, shy - sh * sy / n);
+            if var > 0.0 && cov > 0.0 && cov * cov / var > best.0 {
+                best = (cov * cov / var, tau);
+            }
+        }
+        (best.0 >= ONSET_R2 * syy && syy > 0.0).then_some(e.t - best.1)
     }
 }
 
@@ -217,6 +262,33 @@ mod tests {
         let mut w = Window::default();
         w.enter(at(0.0, 0.0), SPAN_S);
         assert!(w.note(at(119.0, 0.0)).0.is_some() && w.note(at(121.0, 0.0)).0.is_none());
+    }
+
+    /// A window of `n` entries a second apart, with level `f(t)`.
+    fn filled(n: usize, f: impl Fn(f64) -> f64) -> (Window, Entry) {
+        let mut w = Window::default();
+        for i in 0..n {
+            w.enter(at(i as f64, f(i as f64)), f64::INFINITY);
+        }
+        (w, at(n as f64, f(n as f64)))
+    }
+
+    #[test]
+    fn the_onset_of_a_change_is_the_hinge_that_fits_it() {
+        // Flat at 0 with ±0.3 of alternating noise, then 0.5 per second
+        // from 25 s; judged at 40 s: it began 15 s before.
+        let noise = |t: f64| if (t as i64) % 2 == 0 { 0.3 } else { -0.3 };
+        let (w, e) = filled(40, |t| noise(t) + 0.5 * (t - 25.0).max(0.0));
+        let age = w.onset_age(&e, |p| p.x[0]).unwrap();
+        assert!((age - 15.0).abs() <= 1.0, "age {age}");
+        // A change under way from the start dates from the window's start.
+        let (w, e) = filled(30, |t| noise(t) + 0.5 * t);
+        let age = w.onset_age(&e, |p| p.x[0]).unwrap();
+        assert!((age - 30.0).abs() <= 1.0, "age {age}");
+        // A level that wandered up and down before it rose has no onset
+        // the hinge tells (it explains under `ONSET_R2` of the variance).
+        let (w, e) = filled(40, |t| 5.0 * (t / 5.0).sin() + 0.5 * (t - 30.0).max(0.0));
+        assert_eq!(w.onset_age(&e, |p| p.x[0]), None);
     }
 
     #[test]
