@@ -5,7 +5,7 @@
 //! (`Detector::retro_since`); the audit's `reconciled` intervals and the
 //! battery's `FlightResult::reconciled` label the rows from then on. The
 //! causal verdict (`status`, `faults`) is untouched.
-use navguard::audit::{audit_bytes, RetroSpans};
+use navguard::audit::{audit_bytes, Report, RetroSpans};
 use navguard::battery::{self, Flight, FlightResult, Split};
 use navguard::{Config, Detector};
 
@@ -16,9 +16,38 @@ fn run(split: Split, index: u64, i: usize, kind: &str) -> FlightResult {
     battery::run(&f, &Config::default()).unwrap()
 }
 
+/// Battery flight `index` of `split` run, whose fault `i` of `kind` is
+/// flagged for under `causal_max` of its epochs causally and over
+/// `rec_min` reconciled: the causal and the reconciled results.
+fn dated(split: Split, index: u64, i: usize, kind: &str, causal_max: f64, rec_min: f64) -> (FlightResult, FlightResult) {
+    let r = run(split, index, i, kind);
+    assert!(r.events[i].share < causal_max, "#{index}: causal share {}", r.events[i].share);
+    let rec = r.reconciled();
+    assert!(rec.events[i].share > rec_min, "#{index}: reconciled share {}", rec.events[i].share);
+    (r, rec)
+}
+
 /// Epochs labelled healthy but flagged.
 fn false_positives(r: &FlightResult) -> usize {
     r.epochs.iter().filter(|e| e.status != 0 && e.label == 0.0).count()
+}
+
+/// Battery flight `index` of `split` as a navlog CSV through `audit`.
+fn audited(split: Split, index: u64) -> (Flight, Report) {
+    let f = Flight::draw(split, index);
+    let csv = battery::to_csv(&f, &battery::simulate(&f));
+    let (report, _) = audit_bytes(csv.as_bytes(), &Config::default(), false).unwrap();
+    (f, report)
+}
+
+/// The spans a detector dates over flight `f`, as `(onset, end)`.
+fn dated_spans(f: &Flight) -> Vec<(f64, f64)> {
+    let (mut det, mut spans) = (Detector::new(Config::default()).unwrap(), RetroSpans::default());
+    for s in &battery::simulate(f) {
+        det.push(s).unwrap();
+        spans.note(&det, s.t);
+    }
+    spans.spans
 }
 
 #[test]
@@ -28,10 +57,7 @@ fn a_drag_off_the_filter_followed_is_dated_from_its_onset_at_its_end() {
     // (an 84 m jump back, the velocity 0.89 m/s with it) is read as a
     // drag-off's return, and its age, the jump over the velocity's shift,
     // dates the onset.
-    let r = run(Split::Tune, 572, 1, "drag-off");
-    assert!(r.events[1].share < 0.02, "causal share {}", r.events[1].share);
-    let rec = r.reconciled();
-    assert!(rec.events[1].share > 0.95, "reconciled share {}", rec.events[1].share);
+    let (r, rec) = dated(Split::Tune, 572, 1, "drag-off", 0.02, 0.95);
     // The onset is dated at the latest the velocity's jump and its σ allow
     // (1.5 s after the true one here): no healthy epoch is labelled.
     assert_eq!(false_positives(&rec), false_positives(&r));
@@ -57,13 +83,7 @@ fn a_clean_flight_dates_nothing() {
     for i in [7, 25, 28, 31, 36, 45] {
         let f = Flight::draw(Split::Eval, i);
         assert!(f.faults.is_empty(), "eval #{i} is clean");
-        let rows = battery::simulate(&f);
-        let (mut det, mut spans) = (Detector::new(Config::default()).unwrap(), RetroSpans::default());
-        for s in &rows {
-            det.push(s).unwrap();
-            spans.note(&det, s.t);
-        }
-        assert_eq!(spans.spans, vec![], "eval #{i}");
+        assert_eq!(dated_spans(&f), vec![], "eval #{i}");
     }
 }
 
@@ -72,9 +92,7 @@ fn the_audit_reports_the_dated_drag_off_as_one_reconciled_interval() {
     // The same flight as a navlog CSV through `audit`: no causal interval
     // covers the drag; the reconciled list has one that does, with the
     // jump back as its peak offset.
-    let f = Flight::draw(Split::Tune, 572);
-    let csv = battery::to_csv(&f, &battery::simulate(&f));
-    let (report, _) = audit_bytes(csv.as_bytes(), &Config::default(), false).unwrap();
+    let (f, report) = audited(Split::Tune, 572);
     let (a, b) = (f.faults[1].start_log, f.faults[1].end_log);
     let covered = |ivs: &[navguard::audit::FaultInterval]| ivs.iter().map(|iv| (iv.end.min(b) - iv.start.max(a)).max(0.0)).sum::<f64>();
     assert!(covered(&report.faults) < 2.0, "causal {:?}", report.faults);
@@ -130,17 +148,11 @@ fn a_baro_drift_called_late_is_dated_from_its_onset_when_the_baro_jumps_back() {
     // the hinge that fits the window's levels, and the baro's jump back at
     // the fault's end confirms it. Before: 59% of the drift flagged in
     // the reconciled verdict, 1 false epoch.
-    let r = run(Split::Tune, 67, 0, "baro-drift");
-    let causal = r.events[0].share;
-    assert!(causal < 0.65, "causal share {causal}");
-    let rec = r.reconciled();
-    assert!(rec.events[0].share > 0.97, "reconciled share {}", rec.events[0].share);
+    let (r, rec) = dated(Split::Tune, 67, 0, "baro-drift", 0.65, 0.97);
     // Dated 1 s before the onset: five healthy epochs at 5 Hz.
     assert!(false_positives(&rec) <= false_positives(&r) + 5, "{} false epochs", false_positives(&rec));
     // The audit's reconciled interval over it is the baro's.
-    let f = Flight::draw(Split::Tune, 67);
-    let csv = battery::to_csv(&f, &battery::simulate(&f));
-    let (report, _) = audit_bytes(csv.as_bytes(), &Config::default(), false).unwrap();
+    let (f, report) = audited(Split::Tune, 67);
     let (a, b) = (f.faults[0].start_log, f.faults[0].end_log);
     let iv = report.reconciled.iter().find(|iv| iv.start < a + 2.0 && iv.end > b - 1.0).expect("a reconciled interval over the drift");
     assert!(iv.start > a - 2.0, "dated from {} (onset {a})", iv.start);
@@ -152,10 +164,7 @@ fn a_position_ramp_called_late_is_dated_from_its_onset_when_the_fix_jumps_back()
     // Tune #173: a 0.5 m/s horizontal ramp for 30 s under 2.2 m of
     // Gauss–Markov noise, called some 19 s in; its 15 m jump back dates
     // it. No healthy epoch is labelled.
-    let r = run(Split::Tune, 173, 0, "ramp");
-    assert!(r.events[0].share < 0.3, "causal share {}", r.events[0].share);
-    let rec = r.reconciled();
-    assert!(rec.events[0].share > 0.95, "reconciled share {}", rec.events[0].share);
+    let (r, rec) = dated(Split::Tune, 173, 0, "ramp", 0.3, 0.95);
     assert_eq!(false_positives(&rec), false_positives(&r));
 }
 
@@ -169,13 +178,7 @@ fn a_slow_call_that_fades_or_blips_is_not_dated() {
     for i in [1006, 1020] {
         let f = Flight::draw(Split::Tune, i);
         assert!(f.faults.is_empty(), "tune #{i} is clean");
-        let rows = battery::simulate(&f);
-        let (mut det, mut spans) = (Detector::new(Config::default()).unwrap(), RetroSpans::default());
-        for s in &rows {
-            det.push(s).unwrap();
-            spans.note(&det, s.t);
-        }
-        assert_eq!(spans.spans, vec![], "tune #{i}");
+        assert_eq!(dated_spans(&f), vec![], "tune #{i}");
     }
 }
 
@@ -187,28 +190,18 @@ fn a_frozen_fix_and_a_stuck_baro_are_dated_from_their_first_repeat() {
     // receiver owed. Tune #21: a baro stuck for 7.3 s, called once its
     // run spans a second; the run's first sample dates it.
     for (i, kind, causal_max) in [(14, "frozen", 0.8), (21, "baro-stuck", 0.9)] {
-        let r = run(Split::Tune, i, 0, kind);
-        assert!(r.events[0].share < causal_max, "tune #{i}: causal share {}", r.events[0].share);
-        let rec = r.reconciled();
-        assert!(rec.events[0].share > 0.97, "tune #{i}: reconciled share {}", rec.events[0].share);
+        let (r, rec) = dated(Split::Tune, i, 0, kind, causal_max, 0.97);
         assert_eq!(false_positives(&rec), false_positives(&r), "tune #{i}");
     }
     // In the audit, the frozen fix's reconciled interval is a lost fix's
     // from the first repeat on (not a residual fault's; the battery's
     // frozen receiver also drops records, so it is listed as an outage),
     // and the stuck baro's is the baro's.
-    let f = Flight::draw(Split::Tune, 14);
-    let csv = battery::to_csv(&f, &battery::simulate(&f));
-    let (report, _) = audit_bytes(csv.as_bytes(), &Config::default(), false).unwrap();
-    let a = f.faults[0].start_log;
-    let iv = report.reconciled.iter().find(|iv| iv.end > a && iv.start < a + 2.0).expect("a reconciled interval over the frozen fix");
-    assert!((a - 0.1..a + 0.2).contains(&iv.start), "dated from {} (onset {a})", iv.start);
-    assert_eq!((iv.kind, iv.driver), ("gps_outage", "none"), "{iv:?}");
-    let f = Flight::draw(Split::Tune, 21);
-    let csv = battery::to_csv(&f, &battery::simulate(&f));
-    let (report, _) = audit_bytes(csv.as_bytes(), &Config::default(), false).unwrap();
-    let a = f.faults[0].start_log;
-    let iv = report.reconciled.iter().find(|iv| iv.end > a && iv.start < a + 2.0).expect("a reconciled interval over the stuck baro");
-    assert!((a - 0.2..a + 0.2).contains(&iv.start), "dated from {} (onset {a})", iv.start);
-    assert_eq!(iv.driver, "baro", "{iv:?}");
+    for (i, early, kind, driver) in [(14, 0.1, "gps_outage", "none"), (21, 0.2, "residual", "baro")] {
+        let (f, report) = audited(Split::Tune, i);
+        let a = f.faults[0].start_log;
+        let iv = report.reconciled.iter().find(|iv| iv.end > a && iv.start < a + 2.0).expect("a reconciled interval over the fault");
+        assert!((a - early..a + 0.2).contains(&iv.start), "tune #{i}: dated from {} (onset {a})", iv.start);
+        assert_eq!((iv.kind, iv.driver), (kind, driver), "tune #{i}: {iv:?}");
+    }
 }
