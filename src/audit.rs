@@ -135,7 +135,9 @@ fn offset_of(driver: &str, resid: &[f64; 7]) -> (Option<f64>, &'static str) {
 /// last end. A stale fix and no fix count as one kind there: a frozen
 /// receiver whose records also drop alternates between them at every
 /// epoch (battery tune #572: a 9.7 s frozen fix listed as 161 intervals,
-/// now one), and either way no fresh fix came.
+/// now one), and either way no fresh fix came. A dated silence before a
+/// lost fix was called takes the rows it overlaps from an interval of
+/// another kind (they carried the last fix's verdict).
 pub fn reconcile(faults: &[FaultInterval], dated: &[FaultInterval], gps_period: f64) -> Vec<FaultInterval> {
     let max_gap = RECONCILE_GAP_S.max(3.0 * gps_period);
     let mut all: Vec<&FaultInterval> = faults.iter().chain(dated).collect();
@@ -178,9 +180,9 @@ fn no_fresh_fix(k: &str) -> bool {
     matches!(k, "gps_outage" | "gps_stale")
 }
 
-/// The spans a detector dated once their fault had ended (see
-/// [`Detector::retro_since`]): from the fault's onset to the row that
-/// ended it, boot-clock s. A whole log's reconciled verdict is the causal
+/// The spans a detector dated once their fault had ended or was called
+/// (see [`Detector::retro_since`]): from the fault's onset to the row that
+/// dated it, boot-clock s. A whole log's reconciled verdict is the causal
 /// one or any of these; the streaming verdict never looks back.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RetroSpans {

@@ -2074,7 +2074,7 @@ struct Dating {
     /// The baro's stuck run being called is dated (once per run).
     stuck_dated: bool,
     /// A slow fault called, dated only when the GPS or the baro then
-    /// jumps back (`slow_returned`): the offset that grew was the fault's,
+    /// jumps back (`slow_epoch`): the offset that grew was the fault's,
     /// undone at once. A slow test's false call on a wandering healthy
     /// error fades instead (battery tune #1006, eval #102: dated from the
     /// call, 30 and 16 s of healthy epochs each).
@@ -2156,11 +2156,11 @@ impl Dating {
     }
 
     /// `at` gives (`t`, `last_fix`, `gps_dt`, `silence`, `kind`), read only
-    /// with the feature: no fresh fix has come since row s `last_fix`,
-    /// `kind` (an outage or a stale fix) called at row `t`: the receiver went silent, or
-    /// repeated its fix, from the next fix it owed (half a GPS period
-    /// `gps_dt` s on), and at most the `silence` s that make an outage
-    /// back (a silence on the ground is none: real log 09-10 at 201.6 s,
+    /// with the feature: no fresh fix has come since row s `last_fix`, and
+    /// `kind` (an outage or a stale fix) is called at row `t`. The receiver
+    /// went silent, or repeated its fix, from the next fix it owed (half a
+    /// GPS period `gps_dt` s on), and at most the `silence` s that make an
+    /// outage back (a silence on the ground is none: real log 09-10 at 201.6 s,
     /// called 3.1 s later, once flying). Not when it owed none before (an
     /// outage the receiver's status declared at once).
     fn silent(&mut self, at: impl FnOnce() -> (f64, f64, f64, f64, u8)) {
