@@ -1,7 +1,9 @@
 //! Trace one battery flight: `bprobe tune|eval INDEX [IMU_HZ]` prints each
 //! GPS epoch (optionally with the flight's IMU at another rate);
 //! `bprobe check C I` traces instance `I` of the specific check `C`
-//! (`battery::CHECKS`). With `BPROBE_BARO=1` the baro rows too.
+//! (`battery::CHECKS`). With `BPROBE_BARO=1` the baro rows too; with
+//! `BPROBE_RETRO=1` only the spans the detector dates for the reconciled
+//! verdict, with the healthy, faulty and causally flagged epochs in each.
 use navguard::{battery, config::Config, detector::Detector};
 
 fn main() {
