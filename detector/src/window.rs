@@ -142,18 +142,18 @@ impl Window {
     pub fn onset_age(&self, e: &Entry, level: impl Fn(&Entry) -> f64) -> Option<f64> {
         let pts: Vec<(f64, f64)> = self.ring.iter().chain(core::iter::once(e)).map(|p| (p.t, level(p))).collect();
         let n = pts.len() as f64;
-        let mean = pts.iter().map(|p| p.1).sum::<f64>() / n;
+        let sy: f64 = pts.iter().map(|p| p.1).sum();
+        let mean = sy / n;
         let syy: f64 = pts.iter().map(|p| (p.1 - mean) * (p.1 - mean)).sum();
         let mut best = (0.0, e.t);
         for &(tau, _) in &pts[..pts.len() - 1] {
             // y regressed on h = max(0, t − τ): the fit's gain over a flat
             // line is cov(h, y)² / var(h) (sums, not means, as n is common).
-            let (mut sh, mut shh, mut sy, mut shy) = (0.0, 0.0, 0.0, 0.0);
+            let (mut sh, mut shh, mut shy) = (0.0, 0.0, 0.0);
             for &(t, y) in &pts {
                 let h = (t - tau).fmax(0.0);
                 sh += h;
                 shh += h * h;
-                sy += y;
                 shy += h * y;
             }
             let (var, cov) = (shh - sh * sh / n, shy - sh * sy / n);

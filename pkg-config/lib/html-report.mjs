@@ -428,14 +428,15 @@ function faultTable(report, t0) {
 
 /**
  * The whole-log reconciled intervals when they differ from the causal ones
- * (flicker joined; faults the detector saw end dated from their onset, such
- * as a drag-off it followed), folded away under the causal table; '' when
+ * (flicker joined; faults the detector did not flag throughout dated from
+ * their onset, such as a drag-off it followed or a slow drift called late),
+ * folded away under the causal table; '' when
  * they are the same. Their rows are `tr.reconciled-interval`.
  */
 export function reconciledTable(report, t0) {
   const rec = reconciledIfDifferent(report);
   if (!rec) return '';
-  return `<details class="reconciled"><summary>Reconciled over the whole log: ${rec.length} interval${rec.length === 1 ? '' : 's'}</summary><p class="note">The causal intervals above are what the detector said as the samples came. Here, intervals of one kind less than 2 s apart are joined, and a fault the detector saw end without flagging it throughout (a drag-off it followed, a step held past its coast limit) is dated from its onset.</p>${intervalTable(rec, t0, 'reconciled-interval', 'reconciled sortable')}</details>`;
+  return `<details class="reconciled"><summary>Reconciled over the whole log: ${rec.length} interval${rec.length === 1 ? '' : 's'}</summary><p class="note">The causal intervals above are what the detector said as the samples came. Here, intervals of one kind less than 2 s apart are joined, and a fault the detector did not flag throughout is dated from its onset: a drag-off it followed or a step held past its coast limit, once it ended; a slow drift or ramp called late, once its offset jumped back; a frozen or lost fix from the first fix owed, a stuck baro from its first repeat.</p>${intervalTable(rec, t0, 'reconciled-interval', 'reconciled sortable')}</details>`;
 }
 
 function intervalTable(faults, t0, rowClass, tableClass) {
