@@ -1,5 +1,6 @@
 //! Trace one battery flight: `bprobe tune|eval INDEX [IMU_HZ]` prints each
-//! GPS epoch (optionally with the flight's IMU at another rate);
+//! GPS epoch, ending with the filter's accelerometer-bias estimate (`ab`,
+//! body frame, m/s²) (optionally with the flight's IMU at another rate);
 //! `bprobe check C I` traces instance `I` of the specific check `C`
 //! (`battery::CHECKS`). With `BPROBE_BARO=1` the baro rows too; with
 //! `BPROBE_RETRO=1` only the spans the detector dates for the reconciled
@@ -48,7 +49,8 @@ fn main() {
         }
         if o.gps_epoch {
             let i = det.indicators();
-            println!("{:8.2} lab {} st {} k {} drv {} f {:5.2} r {:6.2} rg {:6.2} {:6.2} {:6.2} imu {:5.2} rimu {:5.2} pv {:5.2}", s.t, s.label, o.status, o.kind, o.driver, o.f, o.r, i.r_group[0], i.r_group[1], i.r_group[2], i.imu, i.r_imu, i.pv);
+            let b = det.accel_bias().map_or([f64::NAN; 3], |b| [b.x, b.y, b.z]);
+            println!("{:8.2} lab {} st {} k {} drv {} f {:5.2} r {:6.2} rg {:6.2} {:6.2} {:6.2} imu {:5.2} rimu {:5.2} pv {:5.2} ab {:6.3} {:6.3} {:6.3}", s.t, s.label, o.status, o.kind, o.driver, o.f, o.r, i.r_group[0], i.r_group[1], i.r_group[2], i.imu, i.r_imu, i.pv, b[0], b[1], b[2]);
         }
     }
 }

@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::{bias_share, flagged_after};
+use common::{bias_share, false_positives, flagged_after};
 use navguard::battery::{Flight, Split};
 
 /// Regression: tune #916 (a 0.69 m/s² horizontal bias from 19 s to 123 s
@@ -41,4 +41,28 @@ fn an_accelerometer_biass_end_leaves_no_episode() {
     assert!(share >= 0.5, "{:.0}% of the bias flagged", 100.0 * share);
     let (n, of) = flagged_after(&f, 60.0);
     assert!(of > 200 && n * 20 <= of, "{n} of {of} epochs flagged in the 60 s after the bias");
+}
+
+/// Regression: tune #560 (a 1.37 m/s² horizontal bias from 5 s into a
+/// hover, for 84 s). The test had learnt 32 windows when the bias began;
+/// every window after that called (statistic 11–12), so none was learnt,
+/// the test never reached the 50 it arms at, and all 410 of the bias's
+/// epochs were missed. A refused window now counts towards arming once
+/// half of them were learnt.
+#[test]
+fn a_bias_from_before_the_test_armed_still_arms_it() {
+    let f = Flight::draw(Split::Tune, 560);
+    let share = bias_share(&f);
+    assert!(share >= 0.75, "{:.0}% of the bias flagged", 100.0 * share);
+}
+
+/// Regression: tune #1206 (a fixed-wing under a 2 Hz receiver, its only
+/// fault a baro drift). Its IMU windows swing ±8 m/s from launch, so the
+/// test learns none of them: with every refused window counted towards
+/// arming, its prior σ judged them and the whole healthy flight was
+/// flagged (589 false-positive epochs).
+#[test]
+fn a_test_that_learnt_nothing_is_not_armed_by_its_calls() {
+    let fp = false_positives(Split::Tune, 1206, "baro-drift");
+    assert!(fp <= 20, "{fp} false-positive epochs");
 }

@@ -881,6 +881,20 @@ impl<const D: usize> LagTest<D> {
         // not a run of them.
         let z2: f64 = (0..D).map(|a| (self.last_s[a] / self.sigma(a)).powi(2)).sum();
         if z2 > self.learn_below * self.learn_below * D as f64 {
+            // Still counted towards arming once half of it was learnt, or a
+            // fault that began before the test armed was never judged:
+            // every window called, none was learnt, and the count stayed
+            // short for the whole fault (battery tune #560: a 1.37 m/s²
+            // accelerometer bias from 5 s into the flight, the statistic
+            // 11–12 for 84 s, 32 windows learnt, no flag). Not before: σ
+            // must be this flight's, and a test that learnt too little has
+            // mostly its prior (tune #1206, a fixed-wing under a 2 Hz
+            // receiver whose windows swing ±8 m/s from launch: armed on its
+            // calls, the whole healthy flight was flagged; real log 8-10,
+            // whose vertical test calls every window on the vibration).
+            if 2 * self.learnt >= IMU_ARM_WINDOWS {
+                self.learnt += 1;
+            }
             return;
         }
         self.t_rate = self.last_t;
@@ -945,7 +959,8 @@ const IMU_ALPHA: f64 = 0.005;
 const IMU_TAU: f64 = 20.0;
 /// The IMU consistency joins the decision once this many in-flight windows
 /// are learnt (and after `IMU_ARM_S` of flight, see `detector`): its σ
-/// must be the flight's, not the ground's.
+/// must be the flight's, not the ground's. Once half of them are learnt,
+/// windows refused as calls count too (`LagTest::accept`).
 pub const IMU_ARM_WINDOWS: u32 = 50;
 /// The vertical IMU test's window, s, and ring (GPS epochs, 20 Hz): twice
 /// the horizontal one's. A bias grows `z` with the span; a take-off, a
@@ -1603,6 +1618,30 @@ mod tests {
         assert!(ends < IMU_CALL && slope >= IMU_CALL, "ends {ends:.2}, slope {slope:.2}");
         assert_abs_diff_eq!(ends, 2.58, epsilon = 0.01);
         assert_abs_diff_eq!(slope, 3.85, epsilon = 0.01);
+    }
+
+    /// The IMU test fed white `z` (10 Hz, 0.2 m/s) accepted every epoch,
+    /// then a 2 m/s² ramp on N from `onset` s: windows learnt after 60 s.
+    fn learnt_through_a_ramp(onset: f64) -> u32 {
+        let mut l = LagTest::<2>::new(IMU_CAP, IMU_SPAN, IMU_SIGMA0, IMU_FLOOR, IMU_ALPHA, IMU_TAU, true).learning_below(IMU_CALL);
+        let mut rng = crate::rng::Rng::new(3);
+        for i in 0..600 {
+            let t = i as f64 * 0.1;
+            l.push_by_slope(t, [2.0 * (t - onset).fmax(0.0) + 0.2 * rng.normal(), 0.2 * rng.normal()]);
+            l.accept();
+        }
+        l.learnt()
+    }
+
+    #[test]
+    fn refused_windows_count_towards_arming_only_once_half_of_it_was_learnt() {
+        // Onset at 4 s: 19 windows learnt, every later one a call, none
+        // counted; the test would never arm.
+        assert_eq!(learnt_through_a_ramp(4.0), 19);
+        // Onset at 6 s: 25 or more learnt before the ramp; from there each
+        // refused window counts too (573 windows in all: every one from
+        // 1.5 s, half the span, on).
+        assert_eq!(learnt_through_a_ramp(6.0), 573);
     }
 
     #[test]
