@@ -17,7 +17,7 @@
 // tight-result, gan-progress | gan-result (see tight.js).
 // A comparison runs in slices of ~50 ms, so audit messages are served in
 // between (each job keeps its own wasm object).
-import { flightSeries, renderReport } from './report-html.js';
+import { flightSeries, reconciledAt, renderReport } from './report-html.js';
 import init, { loadAudit, loadLab, Auditor, readLog, simulate, scenarioNames, Detector, CompareRun, TightDetector, tightSimulate, tightGanTrain, version } from './pkg/navguard.js';
 
 // Messages that need the lab wasm module, loaded on the first of them.
@@ -85,7 +85,7 @@ self.onmessage = async (ev) => {
       if (!bytes) throw new Error('no log loaded');
     } else if (msg.type === 'csv') {
       if (!last) throw new Error('no audit result yet');
-      const blob = perSampleCsv(last.columns);
+      const blob = perSampleCsv(last.columns, last.report);
       post({ type: 'csv', id, blob });
       return;
     } else if (msg.type === 'html') {
@@ -472,8 +472,11 @@ function makeGapTest(gaps) {
 
 const RESID_COLS = ['rPn', 'rPe', 'rPd', 'rVn', 'rVe', 'rVd', 'rBaro'];
 
-function perSampleCsv(c) {
-  const parts = [`t,status,f,r,c,kind,${RESID_COLS.join(',')}\n`];
+/** The CLI's per-sample CSV: the contract's columns, kind, the residuals,
+ * and the whole-log verdict (`reconciled`, as `audit --per-sample`). */
+function perSampleCsv(c, report) {
+  const parts = [`t,status,f,r,c,kind,${RESID_COLS.join(',')},reconciled\n`];
+  const at = reconciledAt(report);
   const n = c.t.length;
   const res = RESID_COLS.map((k) => c[k] || new Float64Array(n).fill(NaN));
   const cell = (x) => (Number.isFinite(x) ? x : '');
@@ -484,7 +487,7 @@ function perSampleCsv(c) {
     for (let i = i0; i < i1; i++) {
       s += `${c.t[i]},${c.status[i]},${c.f[i]},${c.r[i]},${c.c[i]},${c.kind[i]}`;
       for (const r of res) s += `,${cell(r[i])}`;
-      s += '\n';
+      s += `,${at(c.t[i])}\n`;
     }
     parts.push(s);
   }

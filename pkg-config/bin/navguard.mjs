@@ -16,9 +16,9 @@ import { performance } from 'node:perf_hooks';
 import { perSampleHeader, perSampleRows } from '../lib/csv.mjs';
 import { streamAudit } from '../lib/stream-audit.mjs';
 import { tcSweep, faultKinds, cleanFlights, formatReport } from '../lib/report.mjs';
-import { CliError, AtomicOutput, openInput, readSmall, walkLogs, writeAtomic } from '../lib/files.mjs';
+import { CliError, AtomicOutput, ScratchFile, openInput, readSmall, walkLogs, writeAtomic } from '../lib/files.mjs';
 import { parseArgs, suggest } from '../lib/args.mjs';
-import { verdictOf, faultList, reconciledIfDifferent, intervalLine, flightSeries, renderReport, qualityLabel, fmtUtc, fmtSince, checkedWithoutGps } from '../lib/html-report.mjs';
+import { verdictOf, faultList, reconciledIfDifferent, reconciledAt, intervalLine, flightSeries, renderReport, qualityLabel, fmtUtc, fmtSince, checkedWithoutGps } from '../lib/html-report.mjs';
 
 const require = createRequire(import.meta.url);
 const ng = require(join(dirname(fileURLToPath(import.meta.url)), '..', 'node.cjs'));
@@ -119,26 +119,52 @@ function auditStream(file, fd, size, perSample, config) {
   return res;
 }
 
+/** The per-sample file's second pass: each line of the first (`scratch`)
+ * with the whole-log verdict appended, `reconciled` (1 inside an interval
+ * of `report.reconciled`, else 0), known only once the log has been read
+ * to its end. */
+function addReconciled(scratch, out, report) {
+  const at = reconciledAt(report);
+  let header = true, chunk = '';
+  scratch.eachLine((line) => {
+    if (line === '') return;
+    chunk += header ? `${line},reconciled\n` : `${line},${at(Number(line.slice(0, line.indexOf(','))))}\n`;
+    header = false;
+    if (chunk.length > 1 << 16) { out.write(chunk); chunk = ''; }
+  });
+  out.write(chunk);
+}
+
 function audit(file, opt) {
   const config = readConfig(opt.config);
   const { fd, size } = openInput(file);
-  let res, perSample = null;
+  let res, perSample = null, scratch = null;
   try {
     // The per-sample file is written beside its target and renamed over it
     // only once the audit succeeded: an output that names the input (or a
     // link to it) is refused, and a failed run leaves no half-written file.
-    if (opt['per-sample']) perSample = new AtomicOutput(opt['per-sample'], '--per-sample', [file]);
+    // Its rows go to a scratch file first: their `reconciled` column needs
+    // the whole log's verdict.
+    if (opt['per-sample']) {
+      perSample = new AtomicOutput(opt['per-sample'], '--per-sample', [file]);
+      scratch = new ScratchFile(opt['per-sample'], '--per-sample');
+    }
     progress(`auditing ${file} (${(size / 1e6).toFixed(1)} MB)...`);
     try {
-      res = auditStream(file, fd, size, perSample, config);
+      res = auditStream(file, fd, size, scratch, config);
     } catch (e) {
       if (e instanceof CliError) throw e;
       throw new CliError(`${file}: ${e && e.message ? e.message : e}`);
     }
-    if (perSample !== null) perSample.commit();
+    if (perSample !== null) {
+      progress(`${file}: writing the per-sample file...`);
+      addReconciled(scratch, perSample, res.report);
+      perSample.commit();
+    }
     perSample = null;
   } finally {
     if (perSample !== null) perSample.abort();
+    if (scratch !== null) scratch.remove();
     closeSync(fd);
     progressDone();
   }
@@ -310,7 +336,7 @@ navguard audit DIR [--json] [--summary OUT.json] [--html OUT.html] [--config CFG
 Audit a flight log (navlog CSV, PX4 ULog or ArduPilot DataFlash, recognised by
 content) or every log under a folder (recursively, following links).
   --json             one JSON report on stdout
-  --per-sample FILE  one line per input row: t,status,f,r,c,kind,residuals
+  --per-sample FILE  one line per input row: t,status,f,r,c,kind,residuals,reconciled
                      (written atomically; never the input file)
   --config FILE      detector configuration (JSON object)
   --html FILE        a self-contained HTML report (one flight, or the fleet

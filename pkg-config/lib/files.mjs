@@ -2,6 +2,8 @@
 // written atomically, and inputs are regular files of bounded size where the
 // CLI reads them whole. Every failure is a `CliError` (one line, exit 2).
 import { closeSync, fstatSync, openSync, readSync, readdirSync, renameSync, statSync, unlinkSync, writeSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { StringDecoder } from 'node:string_decoder';
 import { basename, dirname, join } from 'node:path';
 
 /** An error the CLI reports as one line on stderr with exit code 2. */
@@ -17,6 +19,11 @@ function describe(e) {
 /** `statSync` (following symlinks) or null when the path does not exist. */
 function statOrNull(path) {
   try { return statSync(path); } catch (e) { if (e.code === 'ENOENT') return null; throw new CliError(`${path}: ${describe(e)}`); }
+}
+
+/** `fstatSync(fd)`, or null when the descriptor is not open. */
+function fstatOrNull(fd) {
+  try { return fstatSync(fd); } catch { return null; }
 }
 
 /** True when a and b are the same file: same device and inode, symlinks and
@@ -81,36 +88,119 @@ export function readSmall(path, limit, what) {
 
 let serial = 0;
 
+const pause = new Int32Array(new SharedArrayBuffer(4));
+
+/** Write all of `text` to a stream's descriptor, synchronously. A pipe
+ * that Node made non-blocking (our own stdout, once used) takes part of a
+ * write or none (EAGAIN) while its reader is behind: wait a millisecond
+ * and go on. */
+function writeStream(fd, text) {
+  const buf = Buffer.from(text);
+  for (let off = 0; off < buf.length;) {
+    try { off += writeSync(fd, buf, off); } catch (e) {
+      if (e.code !== 'EAGAIN') throw e;
+      Atomics.wait(pause, 0, 0, 1);
+    }
+  }
+}
+
+/** The path names a stream (a pipe, a terminal, `/dev/stdout`, a socket):
+ * it exists and, links followed, is neither a regular file nor a folder. */
+function isStream(path) {
+  const st = statOrNull(path);
+  return st !== null && !st.isFile() && !st.isDirectory();
+}
+
 /**
  * An output written atomically: the data goes to a temporary file beside the
  * target, which replaces the target by `rename` only on `commit()`. Until
  * then the target is untouched, so an interrupted or failed run leaves the
  * previous file (or none). `abort()` removes the temporary file.
+ *
+ * A stream (`/dev/stdout`, a pipe, a terminal) is written straight: there
+ * is no file to replace, and a rename onto its name replaced the name
+ * itself (run as root, `--per-sample /dev/stdout` turned the `/dev/stdout`
+ * link into a regular file holding the output, and nothing reached the
+ * pipe).
  */
 export class AtomicOutput {
   constructor(path, what, inputs = []) {
     refuseOverwrite(what, path, inputs);
     this.path = path;
     this.what = what;
-    this.tmp = join(dirname(path), `.${basename(path)}.navguard-${process.pid}-${serial++}.tmp`);
-    try { this.fd = openSync(this.tmp, 'wx'); } catch (e) { throw new CliError(`${what} ${path}: ${describe(e)}`); }
+    this.tmp = isStream(path) ? null : join(dirname(path), `.${basename(path)}.navguard-${process.pid}-${serial++}.tmp`);
+    // Our own stdout or stderr by another name is written through its
+    // descriptor: a socket (as Node's child processes get) cannot be
+    // opened by name (ENXIO).
+    this.own = this.tmp === null ? [1, 2].find((fd) => sameFile(statOrNull(path), fstatOrNull(fd))) ?? null : null;
+    if (this.own !== null) { this.fd = this.own; return; }
+    try { this.fd = openSync(this.tmp ?? path, this.tmp ? 'wx' : 'w'); } catch (e) { throw new CliError(`${what} ${path}: ${describe(e)}`); }
   }
 
   write(text) {
-    try { writeSync(this.fd, text); } catch (e) { this.abort(); throw new CliError(`${this.what} ${this.path}: ${describe(e)}`); }
+    if (this.gone) return;
+    try { if (this.tmp === null) writeStream(this.fd, text); else writeSync(this.fd, text); } catch (e) {
+      // A stream's reader went away (`| head`): stop quietly, as stdout does.
+      if (this.tmp === null && e.code === 'EPIPE') { this.gone = true; return; }
+      this.abort();
+      throw new CliError(`${this.what} ${this.path}: ${describe(e)}`);
+    }
   }
 
   commit() {
     try {
-      closeSync(this.fd);
+      if (this.own === null) closeSync(this.fd);
       this.fd = null;
-      renameSync(this.tmp, this.path);
+      if (this.tmp) renameSync(this.tmp, this.path);
     } catch (e) { this.abort(); throw new CliError(`${this.what} ${this.path}: ${describe(e)}`); }
   }
 
   abort() {
+    if (this.fd !== null && this.own === null) { try { closeSync(this.fd); } catch { /* already closed */ } }
+    this.fd = null;
+    if (this.tmp) try { unlinkSync(this.tmp); } catch { /* never created or already renamed */ }
+  }
+}
+
+/**
+ * A private scratch file for an output's first pass, read back line by line
+ * for its second (`eachLine`) and removed by `remove()`. It lies beside the
+ * target, where the output itself will need the room, or in the system's
+ * temporary folder for a stream.
+ */
+export class ScratchFile {
+  constructor(target, what) {
+    this.what = `${what} ${target}`;
+    const dir = isStream(target) ? tmpdir() : dirname(target);
+    this.path = join(dir, `.${basename(target)}.navguard-${process.pid}-${serial++}.scratch`);
+    try { this.fd = openSync(this.path, 'wx+'); } catch (e) { throw new CliError(`${this.what}: ${describe(e)}`); }
+  }
+
+  write(text) {
+    try { writeSync(this.fd, text); } catch (e) { throw new CliError(`${this.what}: ${describe(e)}`); }
+  }
+
+  /** Call `fn(line)` on each line written, without its newline, reading
+   * 4 MiB at a time (memory stays bounded whatever the file's size). */
+  eachLine(fn) {
+    const buf = Buffer.alloc(1 << 22);
+    const text = new StringDecoder('utf8');
+    let pos = 0, rest = '';
+    for (;;) {
+      let n;
+      try { n = readSync(this.fd, buf, 0, buf.length, pos); } catch (e) { throw new CliError(`${this.what}: ${describe(e)}`); }
+      if (n === 0) break;
+      pos += n;
+      const lines = (rest + text.write(buf.subarray(0, n))).split('\n');
+      rest = lines.pop();
+      for (const l of lines) fn(l);
+    }
+    if (rest !== '') fn(rest);
+  }
+
+  remove() {
     if (this.fd !== null) { try { closeSync(this.fd); } catch { /* already closed */ } this.fd = null; }
-    try { unlinkSync(this.tmp); } catch { /* never created or already renamed */ }
+    try { unlinkSync(this.path); } catch { /* already removed */ }
   }
 }
 

@@ -53,6 +53,32 @@ export function intervalLine(f, t0) {
   return `    ${(f.start - t0).toFixed(2).padStart(9)} - ${(f.end - t0).toFixed(2).padStart(9)} s  ${f.kind.padEnd(10)}${sev}${off}  peak F ${f.peakF.toFixed(2)}  driver ${f.driver} (${f.indicator})`;
 }
 
+/**
+ * A per-row lookup of the whole-log verdict: `t` (the log's s) → 1 inside
+ * a reconciled interval (`start ≤ t ≤ end`), else 0. Falls back to the
+ * causal intervals for a report without `reconciled`. The intervals are
+ * merged once and searched by bisection, so rows may come in any order.
+ * It is the `reconciled` column of the per-sample CSV (CLI and page).
+ */
+export function reconciledAt(report) {
+  const src = report && Array.isArray(report.reconciled) ? report.reconciled : faultList(report);
+  const spans = src.map((f) => [f.start, f.end]).filter(([a, b]) => a <= b).sort((x, y) => x[0] - y[0]);
+  const merged = [];
+  for (const [a, b] of spans) {
+    const last = merged[merged.length - 1];
+    if (last && a <= last[1]) last[1] = Math.max(last[1], b);
+    else merged.push([a, b]);
+  }
+  return (t) => {
+    let lo = 0, hi = merged.length;
+    while (lo < hi) {
+      const mid = (lo + hi) >> 1;
+      if (merged[mid][0] <= t) lo = mid + 1; else hi = mid;
+    }
+    return lo > 0 && t <= merged[lo - 1][1] ? 1 : 0;
+  };
+}
+
 /** How many intervals the whole-log reconciliation leaves, or null. */
 export function reconciledCount(report) {
   return report && Array.isArray(report.reconciled) ? report.reconciled.length : null;

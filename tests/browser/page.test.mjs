@@ -203,10 +203,10 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
     const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#export-csv')]);
     const csv = await readFile(await dl.path(), 'utf8');
     const lines = csv.trimEnd().split('\n');
-    assert.equal(lines[0], 't,status,f,r,c,kind,rPn,rPe,rPd,rVn,rVe,rVd,rBaro');
+    assert.equal(lines[0], 't,status,f,r,c,kind,rPn,rPe,rPd,rVn,rVe,rVd,rBaro,reconciled');
     assert.ok(lines.length > 1000);
     const cells = lines.slice(1).map((l) => l.split(','));
-    for (const c of cells) assert.equal(c.length, 13, `bad CSV row: ${c.join(',')}`);
+    for (const c of cells) assert.equal(c.length, 14, `bad CSV row: ${c.join(',')}`);
     const gpsRows = cells.filter((c) => c[6] !== '');
     assert.ok(gpsRows.length > 500 && gpsRows.length < cells.length / 2, `rows with a GPS residual: ${gpsRows.length} of ${cells.length}`);
     for (const c of gpsRows) for (const v of c.slice(6, 12)) assert.ok(Number.isFinite(Number(v)) && v !== '', `bad residual cell in ${c.join(',')}`);
@@ -217,6 +217,10 @@ test('ArduPilot Loiter_RTL.bin through the file input: GPS outage found, plots d
     assert.equal(rep.faults.length, rows.length);
     assert.equal(rep.ephSource, 'hdop');
     assert.equal(rep.startUtc, '2014-11-06T16:02:33.790Z');
+    // The CSV's last column is the JSON report's whole-log verdict, row by row.
+    const inRec = (t) => rep.reconciled.some((f) => f.start <= t && t <= f.end);
+    assert.ok(cells.some((c) => c[13] === '1'));
+    assert.deepEqual(cells.filter((c) => (c[13] === '1') !== inRec(+c[0])).map((c) => c[0]).slice(0, 5), []);
     // the HTML report the page exports is the CLI's file (same module)
     const [dh] = await Promise.all([page.waitForEvent('download'), page.click('#export-html')]);
     assert.match(dl.suggestedFilename() + dh.suggestedFilename(), /\.report\.html$/);

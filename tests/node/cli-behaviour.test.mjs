@@ -186,3 +186,26 @@ test('report FILE --html: atomic, never the input, a failed run leaves the previ
   assert.match(html, /Content-Security-Policy" content="default-src 'none'/);
   assert.deepEqual(readdirSync(dirname(out)).sort(), ['bad.csv', 'r.html']);
 });
+
+test('the per-sample file ends with the whole-log verdict: real log 09-10 dates each outage from the fix it missed', () => {
+  const per = join(tmp, 'per-09-10.csv');
+  const r = run(['audit', join(data, 'ardupilot', 'erle_copter_09-10-2014_30.BIN'), '--json', '--per-sample', per]);
+  assert.equal(r.status, 0, r.stderr);
+  const rep = JSON.parse(r.stdout);
+  const lines = readFileSync(per, 'utf8').trim().split('\n');
+  assert.match(lines[0], /^t,status,f,r,c,.*,reconciled$/);
+  const rows = lines.slice(1).map((l) => l.split(','));
+  const rec = rows.map((c) => c[c.length - 1]);
+  assert.ok(rec.every((v) => v === '0' || v === '1'));
+  // Every row flagged as the samples came is inside the whole-log verdict;
+  // the verdict adds the silences before the outages it called (session 28:
+  // each about 1.1 s, where the next fix was due), 427 rows in all.
+  const flaggedOut = rows.filter((c, i) => c[1] !== '0' && rec[i] === '0').length;
+  const added = rows.filter((c, i) => c[1] === '0' && rec[i] === '1');
+  assert.equal(flaggedOut, 0);
+  assert.equal(added.length, 427);
+  // The first outage: causal from its call, reconciled from the silence.
+  assert.ok(rep.reconciled[0].start < rep.faults[0].start - 1, JSON.stringify([rep.reconciled[0], rep.faults[0]]));
+  assert.ok(added.some((c) => +c[0] >= rep.reconciled[0].start && +c[0] < rep.faults[0].start));
+});
+

@@ -5,7 +5,7 @@
 import { test, before } from 'node:test';
 import assert from 'node:assert/strict';
 import { spawnSync, execFileSync } from 'node:child_process';
-import { mkdtempSync, readFileSync, writeFileSync, symlinkSync, linkSync, readdirSync, mkdirSync, existsSync, copyFileSync } from 'node:fs';
+import { mkdtempSync, readFileSync, writeFileSync, symlinkSync, linkSync, readdirSync, mkdirSync, existsSync, copyFileSync, lstatSync } from 'node:fs';
 import { createHash } from 'node:crypto';
 import { tmpdir } from 'node:os';
 import { dirname, join } from 'node:path';
@@ -135,6 +135,23 @@ test('audit DIR recurses, follows a symlink to a good log, and counts what it sk
   assert.deepEqual(s.skipped.map((k) => k.file).sort(), [join(fleet, 'broken.csv'), join(fleet, 'notes.txt')]);
   assert.deepEqual(JSON.parse(readFileSync(summary, 'utf8')).logs, s.logs);
   assert.equal(sha(log), logHash);
+});
+
+test('--per-sample /dev/stdout writes to the pipe and leaves /dev/stdout as it was', () => {
+  // Regression: the output went to a temporary file in /dev renamed over
+  // /dev/stdout; run as root, that turned the link into a regular file
+  // holding the output, and nothing reached the pipe.
+  const before = lstatSync('/dev/stdout');
+  const r = run(['audit', log, '--per-sample', '/dev/stdout'], { maxBuffer: 1 << 26 });
+  assert.equal(r.status, 0, r.stderr);
+  const lines = r.stdout.split('\n');
+  const head = lines.indexOf('t,status,f,r,c,kind,rPn,rPe,rPd,rVn,rVe,rVd,rBaro,reconciled');
+  assert.ok(head >= 0, r.stdout.slice(0, 300));
+  assert.equal(lines.slice(head + 1).filter((l) => /^[0-9.]+,[01],/.test(l)).length, 12500);
+  const after = lstatSync('/dev/stdout');
+  assert.deepEqual([after.isSymbolicLink(), after.isFile(), after.ino], [before.isSymbolicLink(), before.isFile(), before.ino]);
+  // Its scratch file (the first pass, in the temporary folder) is gone.
+  assert.deepEqual(readdirSync(tmpdir()).filter((n) => n.startsWith('.stdout.navguard-')), []);
 });
 
 test('train --out naming an input is refused', () => {

@@ -128,7 +128,13 @@ test('audit command on a simulated CSV: JSON report, per-sample CSV, metrics', (
   assert.ok(rep.faults.length >= 1 && rep.faults.some((f) => f.end >= 120 && f.start <= 135), JSON.stringify(rep.faults));
   for (const k of ['accuracy', 'falseAlarmRate', 'misdetectionRate', 'precision', 'recall', 'meanDetectionDelay']) assert.ok(k in rep.metrics, k);
   const lines = readFileSync(per, 'utf8').trim().split('\n');
-  assert.equal(lines[0], 't,status,f,r,c,kind,rPn,rPe,rPd,rVn,rVe,rVd,rBaro');
+  assert.equal(lines[0], 't,status,f,r,c,kind,rPn,rPe,rPd,rVn,rVe,rVd,rBaro,reconciled');
+  // The last column is the whole-log verdict: 1 exactly on the rows inside
+  // the report's reconciled intervals.
+  const inRec = (t) => rep.reconciled.some((f) => f.start <= t && t <= f.end);
+  const rows = lines.slice(1).map((l) => l.split(','));
+  assert.ok(rows.filter((c) => c[13] === '1').length >= 700);
+  assert.deepEqual(rows.filter((c) => (c[13] === '1') !== inRec(+c[0])), []);
   // A GPS epoch inside the 10 m step carries a large position residual.
   const inside = lines.slice(1).map((l) => l.split(',')).filter((c) => +c[0] >= 121 && +c[0] < 122 && c[6] !== '');
   assert.ok(inside.length >= 5 && inside.every((c) => Math.hypot(+c[6], +c[7]) > 5), inside.slice(0, 3).join(' | '));
