@@ -41,3 +41,18 @@ fn a_long_step_under_a_slow_boot_clock_is_held_from_its_jump() {
     assert!(share >= 0.95, "{:.0}% of the step flagged", 100.0 * share);
     assert!(of >= 150 && n <= 30, "{n} of {of} epochs flagged in the 20 s after the step");
 }
+
+/// Regression: eval #63 (survey, 5 Hz receiver, mixed noise σ 0.61 m): a
+/// 6.63 m vertical step from 28.1 s for 97 s, when the GPS position's track
+/// was 27.4 s old. The departure was judged only from 30 s of age; before
+/// that the track learnt the step as its own wander (σ 0.83 → 2.16 m), and
+/// all 472 of its epochs were missed. The track judges a departure from
+/// 10 s of age, as it judges a return to its origin.
+#[test]
+fn a_step_while_the_track_is_young_is_caught_by_its_jump() {
+    let f = Flight::draw(Split::Eval, 63);
+    assert_eq!((f.faults[0].kind.name(), f.faults[0].axis), ("step", battery::Axis::Vertical));
+    let (share, n, of) = held(&f);
+    assert!(share >= 0.95, "{:.0}% of the step flagged", 100.0 * share);
+    assert!(of >= 90 && n <= 2, "{n} of {of} epochs flagged in the 20 s after the step");
+}
