@@ -128,6 +128,7 @@ export class AtomicOutput {
     refuseOverwrite(what, path, inputs);
     this.path = path;
     this.what = what;
+    this.gone = false;
     this.tmp = isStream(path) ? null : join(dirname(path), `.${basename(path)}.navguard-${process.pid}-${serial++}.tmp`);
     // Our own stdout or stderr by another name is written through its
     // descriptor: a socket (as Node's child processes get) cannot be

@@ -208,4 +208,3 @@ test('the per-sample file ends with the whole-log verdict: real log 09-10 dates 
   assert.ok(rep.reconciled[0].start < rep.faults[0].start - 1, JSON.stringify([rep.reconciled[0], rep.faults[0]]));
   assert.ok(added.some((c) => +c[0] >= rep.reconciled[0].start && +c[0] < rep.faults[0].start));
 });
-
