@@ -147,7 +147,7 @@ function audit(file, opt) {
     // the whole log's verdict.
     if (opt['per-sample']) {
       perSample = new AtomicOutput(opt['per-sample'], '--per-sample', [file]);
-      scratch = new ScratchFile(opt['per-sample'], '--per-sample');
+      scratch = new ScratchFile(perSample);
     }
     progress(`auditing ${file} (${(size / 1e6).toFixed(1)} MB)...`);
     try {

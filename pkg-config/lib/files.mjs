@@ -104,13 +104,6 @@ function writeStream(fd, text) {
   }
 }
 
-/** The path names a stream (a pipe, a terminal, `/dev/stdout`, a socket):
- * it exists and, links followed, is neither a regular file nor a folder. */
-function isStream(path) {
-  const st = statOrNull(path);
-  return st !== null && !st.isFile() && !st.isDirectory();
-}
-
 /**
  * An output written atomically: the data goes to a temporary file beside the
  * target, which replaces the target by `rename` only on `commit()`. Until
@@ -129,11 +122,15 @@ export class AtomicOutput {
     this.path = path;
     this.what = what;
     this.gone = false;
-    this.tmp = isStream(path) ? null : join(dirname(path), `.${basename(path)}.navguard-${process.pid}-${serial++}.tmp`);
+    // A stream (a pipe, a terminal, `/dev/stdout`, a socket) exists and,
+    // links followed, is neither a regular file nor a folder.
+    const st = statOrNull(path);
+    const stream = st !== null && !st.isFile() && !st.isDirectory();
+    this.tmp = stream ? null : join(dirname(path), `.${basename(path)}.navguard-${process.pid}-${serial++}.tmp`);
     // Our own stdout or stderr by another name is written through its
     // descriptor: a socket (as Node's child processes get) cannot be
     // opened by name (ENXIO).
-    this.own = this.tmp === null ? [1, 2].find((fd) => sameFile(statOrNull(path), fstatOrNull(fd))) ?? null : null;
+    this.own = stream ? [1, 2].find((fd) => sameFile(st, fstatOrNull(fd))) ?? null : null;
     if (this.own !== null) { this.fd = this.own; return; }
     try { this.fd = openSync(this.tmp ?? path, this.tmp ? 'wx' : 'w'); } catch (e) { throw new CliError(`${what} ${path}: ${describe(e)}`); }
   }
@@ -164,16 +161,16 @@ export class AtomicOutput {
 }
 
 /**
- * A private scratch file for an output's first pass, read back line by line
- * for its second (`eachLine`) and removed by `remove()`. It lies beside the
- * target, where the output itself will need the room, or in the system's
- * temporary folder for a stream.
+ * A private scratch file for the first pass of an `AtomicOutput`, read back
+ * line by line for its second (`eachLine`) and removed by `remove()`. It
+ * lies beside the output's temporary file, where the output itself will
+ * need the room, or in the system's temporary folder for a stream.
  */
 export class ScratchFile {
-  constructor(target, what) {
-    this.what = `${what} ${target}`;
-    const dir = isStream(target) ? tmpdir() : dirname(target);
-    this.path = join(dir, `.${basename(target)}.navguard-${process.pid}-${serial++}.scratch`);
+  constructor(out) {
+    this.what = `${out.what} ${out.path}`;
+    const dir = out.tmp === null ? tmpdir() : dirname(out.tmp);
+    this.path = join(dir, `.${basename(out.path)}.navguard-${process.pid}-${serial++}.scratch`);
     try { this.fd = openSync(this.path, 'wx+'); } catch (e) { throw new CliError(`${this.what}: ${describe(e)}`); }
   }
 
